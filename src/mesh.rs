@@ -1,0 +1,270 @@
+//! Meshing: the scene's polygons become elements. Quads are cut into quad grids and triangles into
+//! triangle grids so that no element edge exceeds `max_element_edge`; the elements of one surface share
+//! their vertices, so per-vertex values interpolate without T-vertices inside a surface.
+//!
+//! Hot per-element data is kept as a struct of arrays (`Elements`); each element is also split into
+//! one or two triangles for ray tracing (`Mesh::triangles`).
+
+use crate::scene::{Material, SceneDescription};
+use glam::Vec3;
+
+/// Marks "no index" in `u32` index arrays (the fourth corner of a triangle, a missing back side).
+pub const NONE: u32 = u32::MAX;
+
+/// Per-element data, one entry per element in every array.
+#[derive(Clone, Debug, Default)]
+pub struct Elements {
+    /// Vertex indices into `Mesh::positions`, counter-clockwise seen from the front; a triangle has
+    /// `NONE` as its fourth corner.
+    pub corners: Vec<[u32; 4]>,
+    pub centre: Vec<Vec3>,
+    /// Unit normal by the right-hand rule (the front side).
+    pub normal: Vec<Vec3>,
+    pub area: Vec<f32>,
+    /// Index of the scene surface the element was cut from (its back side, for a two-sided surface,
+    /// has its own surface index past the scene's surfaces: see `Mesh::surface_source`).
+    pub surface: Vec<u32>,
+    pub material: Vec<u32>,
+    /// Diffuse reflectance ρ (the material's `Kd`).
+    pub reflectance: Vec<Vec3>,
+    /// Emitted exitance E = π·Ke.
+    pub emission: Vec<Vec3>,
+}
+
+impl Elements {
+    pub fn len(&self) -> usize {
+        self.centre.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.centre.is_empty()
+    }
+
+    /// The element's polygon as 3 or 4 points.
+    pub fn polygon<'a>(&self, positions: &'a [Vec3], i: usize) -> impl Iterator<Item = Vec3> + 'a {
+        let c = self.corners[i];
+        c.into_iter().filter(|&v| v != NONE).map(move |v| positions[v as usize])
+    }
+
+    /// Number of corners (3 or 4).
+    pub fn corner_count(&self, i: usize) -> usize {
+        if self.corners[i][3] == NONE {
+            3
+        } else {
+            4
+        }
+    }
+}
+
+/// The meshed scene.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    /// Vertex positions, shared by the elements of one surface side.
+    pub positions: Vec<Vec3>,
+    pub elements: Elements,
+    /// Triangles for ray tracing: vertex indices, counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// The element each triangle belongs to (its front side).
+    pub triangle_element: Vec<u32>,
+    /// For a two-sided surface: the element on the triangle's back side, else `NONE`.
+    pub triangle_back_element: Vec<u32>,
+    /// For a two-sided surface: the back side's vertex indices at the same three corners.
+    pub triangle_back_vertices: Vec<[u32; 3]>,
+    /// For each mesh surface (scene surfaces, then back sides of two-sided ones): the scene surface.
+    pub surface_source: Vec<u32>,
+}
+
+/// Grid resolution needed so that no piece of an edge of length `len` exceeds `max_edge`.
+fn segments(len: f32, max_edge: f32) -> u32 {
+    if !(max_edge.is_finite() && max_edge > 0.0) {
+        return 1;
+    }
+    ((len / max_edge) * (1.0 - 1e-6)).ceil().max(1.0) as u32
+}
+
+impl Mesh {
+    /// Cuts every surface of the scene into elements of at most `max_element_edge` (see module docs).
+    pub fn build(scene: &SceneDescription, max_element_edge: f32) -> Mesh {
+        let mut mesh = Mesh::default();
+        let mut back_sides = Vec::new();
+        for (s, surface) in scene.surfaces.iter().enumerate() {
+            let material = &scene.materials[surface.material as usize];
+            mesh.add_surface(&surface.vertices, s as u32, surface.material, material, max_element_edge);
+            mesh.surface_source.push(s as u32);
+            if surface.two_sided {
+                back_sides.push(s);
+            }
+        }
+        // Back sides come after all front sides: the same grid with reversed winding.
+        for s in back_sides {
+            let surface = &scene.surfaces[s];
+            let material = &scene.materials[surface.material as usize];
+            let mesh_surface = mesh.surface_source.len() as u32;
+            mesh.surface_source.push(s as u32);
+            mesh.add_back_side(s as u32, mesh_surface, surface.material, material);
+        }
+        mesh
+    }
+
+    fn add_surface(&mut self, polygon: &[Vec3], surface: u32, material_index: u32, material: &Material, max_edge: f32) {
+        match polygon.len() {
+            3 => self.add_triangle_grid(polygon, surface, material_index, material, max_edge),
+            4 => self.add_quad_grid(polygon, surface, material_index, material, max_edge),
+            n => panic!("surfaces are triangles or quads (the parser fans larger polygons), got {n}"),
+        }
+    }
+
+    fn add_quad_grid(&mut self, q: &[Vec3], surface: u32, material_index: u32, material: &Material, max_edge: f32) {
+        let nu = segments((q[1] - q[0]).length().max((q[2] - q[3]).length()), max_edge);
+        let nv = segments((q[3] - q[0]).length().max((q[2] - q[1]).length()), max_edge);
+        let base = self.positions.len() as u32;
+        for j in 0..=nv {
+            let t = j as f32 / nv as f32;
+            for i in 0..=nu {
+                let s = i as f32 / nu as f32;
+                let p =
+                    q[0] * ((1.0 - s) * (1.0 - t)) + q[1] * (s * (1.0 - t)) + q[2] * (s * t) + q[3] * ((1.0 - s) * t);
+                self.positions.push(p);
+            }
+        }
+        let idx = |i: u32, j: u32| base + j * (nu + 1) + i;
+        for j in 0..nv {
+            for i in 0..nu {
+                let c = [idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)];
+                self.push_element(c, surface, material_index, material);
+            }
+        }
+    }
+
+    fn add_triangle_grid(
+        &mut self,
+        tri: &[Vec3],
+        surface: u32,
+        material_index: u32,
+        material: &Material,
+        max_edge: f32,
+    ) {
+        let longest = (tri[1] - tri[0]).length().max((tri[2] - tri[1]).length()).max((tri[0] - tri[2]).length());
+        let n = segments(longest, max_edge);
+        let base = self.positions.len() as u32;
+        // Row j holds n + 1 − j vertices: P(i, j) = v0 + (i/n)(v1 − v0) + (j/n)(v2 − v0).
+        let mut row_start = Vec::with_capacity(n as usize + 1);
+        for j in 0..=n {
+            row_start.push(self.positions.len() as u32 - base);
+            for i in 0..=(n - j) {
+                let p = tri[0] + (tri[1] - tri[0]) * (i as f32 / n as f32) + (tri[2] - tri[0]) * (j as f32 / n as f32);
+                self.positions.push(p);
+            }
+        }
+        let idx = |i: u32, j: u32| base + row_start[j as usize] + i;
+        for j in 0..n {
+            for i in 0..(n - j) {
+                self.push_element([idx(i, j), idx(i + 1, j), idx(i, j + 1), NONE], surface, material_index, material);
+                if i + j + 1 < n {
+                    self.push_element(
+                        [idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1), NONE],
+                        surface,
+                        material_index,
+                        material,
+                    );
+                }
+            }
+        }
+    }
+
+    /// Mirrors the elements of scene surface `source` (already meshed) as a back side with its own
+    /// vertices and reversed winding, and links the front triangles to it.
+    fn add_back_side(&mut self, source: u32, mesh_surface: u32, material_index: u32, material: &Material) {
+        let front: Vec<usize> = (0..self.elements.len()).filter(|&e| self.elements.surface[e] == source).collect();
+        let mut triangles_of = std::collections::HashMap::<u32, Vec<usize>>::new();
+        for (t, &e) in self.triangle_element.iter().enumerate() {
+            if self.elements.surface[e as usize] == source {
+                triangles_of.entry(e).or_default().push(t);
+            }
+        }
+        let mut remap = std::collections::HashMap::new();
+        for &e in &front {
+            let c = self.elements.corners[e];
+            let mut back = [NONE; 4];
+            let n = self.elements.corner_count(e);
+            for k in 0..n {
+                let v = c[n - 1 - k];
+                back[k] = *remap.entry(v).or_insert_with(|| {
+                    self.positions.push(self.positions[v as usize]);
+                    self.positions.len() as u32 - 1
+                });
+            }
+            let back_element = self.elements.len() as u32;
+            let first_triangle = self.triangles.len();
+            self.push_element(back, mesh_surface, material_index, material);
+            // The back element's own triangles are not traced; the front triangles point to it.
+            self.triangles.truncate(first_triangle);
+            self.triangle_element.truncate(first_triangle);
+            self.triangle_back_element.truncate(first_triangle);
+            self.triangle_back_vertices.truncate(first_triangle);
+            for &t in &triangles_of[&(e as u32)] {
+                self.triangle_back_element[t] = back_element;
+                self.triangle_back_vertices[t] = self.triangles[t].map(|v| remap[&v]);
+            }
+        }
+    }
+
+    fn push_element(&mut self, corners: [u32; 4], surface: u32, material_index: u32, material: &Material) {
+        let p = |k: usize| self.positions[corners[k] as usize];
+        let (cross, centre) = if corners[3] == NONE {
+            ((p(1) - p(0)).cross(p(2) - p(0)), (p(0) + p(1) + p(2)) / 3.0)
+        } else {
+            ((p(2) - p(0)).cross(p(3) - p(1)), (p(0) + p(1) + p(2) + p(3)) / 4.0)
+        };
+        let area = 0.5 * cross.length();
+        if !(area > 0.0) || !area.is_finite() {
+            return; // degenerate piece: the parser already rejected degenerate faces; never a NaN here.
+        }
+        let element = self.elements.len() as u32;
+        let e = &mut self.elements;
+        e.corners.push(corners);
+        e.centre.push(centre);
+        e.normal.push(cross / (2.0 * area));
+        e.area.push(area);
+        e.surface.push(surface);
+        e.material.push(material_index);
+        e.reflectance.push(material.diffuse_reflectance);
+        e.emission.push(material.emitted_exitance());
+        let tris: &[[u32; 3]] = if corners[3] == NONE {
+            &[[corners[0], corners[1], corners[2]]]
+        } else {
+            &[[corners[0], corners[1], corners[2]], [corners[0], corners[2], corners[3]]]
+        };
+        for &t in tris {
+            self.triangles.push(t);
+            self.triangle_element.push(element);
+            self.triangle_back_element.push(NONE);
+            self.triangle_back_vertices.push([NONE; 3]);
+        }
+    }
+
+    /// Per-vertex values from per-element values: the area-weighted mean over the elements that share
+    /// the vertex (vertices are shared only within one surface side, so values never bleed across
+    /// surfaces). This is Gouraud's vertex interpolation of a radiosity solution.
+    pub fn vertex_average<T>(&self, element_values: &[T]) -> Vec<T>
+    where
+        T: Copy + Default + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
+    {
+        assert_eq!(element_values.len(), self.elements.len());
+        let mut sum = vec![T::default(); self.positions.len()];
+        let mut weight = vec![0.0f64; self.positions.len()];
+        for (e, corners) in self.elements.corners.iter().enumerate() {
+            let a = self.elements.area[e] as f64;
+            for &v in corners.iter().filter(|&&v| v != NONE) {
+                sum[v as usize] = sum[v as usize] + element_values[e] * a;
+                weight[v as usize] += a;
+            }
+        }
+        sum.iter().zip(&weight).map(|(&s, &w)| if w > 0.0 { s * (1.0 / w) } else { s }).collect()
+    }
+
+    /// Sum of element areas.
+    pub fn total_area(&self) -> f64 {
+        self.elements.area.iter().map(|&a| a as f64).sum()
+    }
+}

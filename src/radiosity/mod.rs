@@ -1,0 +1,11 @@
+//! Pass one: view-independent diffuse radiosity. Form factors by the hemicube (Cohen and Greenberg
+//! 1985), the system B = E + ρ·F·B solved by Gauss-Seidel with overrelaxation, Jacobi or progressive
+//! refinement, and the immutable `Solution` that pass two reads.
+
+pub mod form_factors;
+pub mod hemicube;
+pub mod solution;
+pub mod solver;
+
+pub use form_factors::FormFactors;
+pub use solution::Solution;

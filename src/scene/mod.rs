@@ -1,0 +1,245 @@
+//! The plain scene description: camera, image and solver settings, materials and surfaces, as parsed
+//! from a scene file. Nothing here builds meshes or acceleration structures (see `mesh` and `accel`).
+
+pub mod obj;
+pub mod parse;
+
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+pub use parse::{load, parse_str, SceneError};
+
+/// Where a piece of scene data came from, for error messages and warnings (pbrt's `FileLoc`).
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub struct SourceLoc {
+    pub path: PathBuf,
+    /// 1-based line, 0 when unknown.
+    pub line: usize,
+}
+
+impl std::fmt::Display for SourceLoc {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.line > 0 {
+            write!(f, "{}:{}", self.path.display(), self.line)
+        } else {
+            write!(f, "{}", self.path.display())
+        }
+    }
+}
+
+/// A pinhole camera. `vfov_deg` is the full vertical field of view.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub look_at: Vec3,
+    pub up: Vec3,
+    pub vfov_deg: f32,
+}
+
+/// Pixel reconstruction filter of the film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FilterKind {
+    Box,
+    Tent,
+    Gaussian,
+    Mitchell,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageSettings {
+    pub width_px: u32,
+    pub height_px: u32,
+    pub samples_per_pixel: u32,
+    pub filter: FilterKind,
+    /// Filter radius in pixels.
+    pub filter_radius_px: f32,
+    /// Adaptive supersampling: extra samples where a pixel's samples disagree by more than this
+    /// relative contrast; `None` disables it.
+    pub adaptive_threshold: Option<f32>,
+    /// Most samples an adaptive pixel may take.
+    pub adaptive_max_samples: u32,
+    pub seed: u64,
+}
+
+impl Default for ImageSettings {
+    fn default() -> Self {
+        ImageSettings {
+            width_px: 256,
+            height_px: 256,
+            samples_per_pixel: 16,
+            filter: FilterKind::Box,
+            filter_radius_px: 0.5,
+            adaptive_threshold: None,
+            adaptive_max_samples: 64,
+            seed: 0,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolverKind {
+    GaussSeidel,
+    Jacobi,
+    Progressive,
+}
+
+impl SolverKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverKind::GaussSeidel => "gauss-seidel",
+            SolverKind::Jacobi => "jacobi",
+            SolverKind::Progressive => "progressive",
+        }
+    }
+}
+
+/// Settings of pass one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RadiosityParams {
+    /// Surfaces are subdivided until no element edge is longer (scene units).
+    pub max_element_edge: f32,
+    /// Pixels across the hemicube's top face; side faces are this wide and half as high.
+    pub hemicube_resolution_px: u32,
+    pub solver: SolverKind,
+    /// Overrelaxation factor ω of Gauss-Seidel (1 = plain Gauss-Seidel).
+    pub relaxation: f64,
+    /// Stop when the largest relative change (gathering) or unshot fraction (shooting) is below it.
+    pub tolerance: f64,
+    /// Cap on sweeps (gathering) or shots / element count (shooting).
+    pub max_iterations: u32,
+    /// Rotate each hemicube by a seeded random angle about its normal (against aliasing).
+    pub rotate_hemicubes: bool,
+    pub seed: u64,
+}
+
+impl Default for RadiosityParams {
+    fn default() -> Self {
+        RadiosityParams {
+            max_element_edge: f32::INFINITY,
+            hemicube_resolution_px: 128,
+            solver: SolverKind::GaussSeidel,
+            relaxation: 1.2,
+            tolerance: 1e-4,
+            max_iterations: 1000,
+            rotate_hemicubes: true,
+            seed: 0,
+        }
+    }
+}
+
+/// How pass two obtains direct light at diffuse hits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DirectMode {
+    /// The radiosity solution's diffuse term holds direct light (meshed shadows).
+    Radiosity,
+    /// Direct light sampled per pixel with shadow rays; only the indirect radiosity is added.
+    Pixel,
+}
+
+/// Settings of pass two.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderParams {
+    pub direct: DirectMode,
+    /// Shadow rays per emitter per diffuse hit when `direct = Pixel` (and for Phong highlights).
+    pub light_samples: u32,
+    pub max_depth: u32,
+    /// Paths whose throughput falls below this (max channel) are dropped.
+    pub min_throughput: f32,
+}
+
+impl Default for RenderParams {
+    fn default() -> Self {
+        RenderParams { direct: DirectMode::Radiosity, light_samples: 4, max_depth: 8, min_throughput: 1e-3 }
+    }
+}
+
+/// A surface material, in the MTL meanings radray uses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// `Kd`: Lambertian reflectance per channel, in [0, 1).
+    pub diffuse_reflectance: Vec3,
+    /// `Ke`: emitted radiance (W·sr⁻¹·m⁻², or the scene's units), from the front side only.
+    pub emitted_radiance: Vec3,
+    /// `Ks`: mirror reflectance (for a dielectric, a tint on its Fresnel reflection).
+    pub specular_reflectance: Vec3,
+    /// `Ns`: Phong exponent of a highlight from each emitter; `None` for no highlight.
+    pub phong_exponent: Option<f32>,
+    /// `Ni`: index of refraction (used when transmittance > 0).
+    pub ior: f32,
+    /// `1 − d`: transmittance of a smooth dielectric; 0 for opaque.
+    pub transmittance: f32,
+}
+
+impl Material {
+    pub fn diffuse(name: &str, reflectance: Vec3) -> Self {
+        Material {
+            name: name.to_string(),
+            diffuse_reflectance: reflectance,
+            emitted_radiance: Vec3::ZERO,
+            specular_reflectance: Vec3::ZERO,
+            phong_exponent: None,
+            ior: 1.0,
+            transmittance: 0.0,
+        }
+    }
+
+    /// Emitted exitance E = π·Ke of a Lambertian emitter.
+    pub fn emitted_exitance(&self) -> Vec3 {
+        self.emitted_radiance * std::f32::consts::PI
+    }
+
+    pub fn is_emitter(&self) -> bool {
+        self.emitted_radiance.max_element() > 0.0
+    }
+
+    pub fn is_dielectric(&self) -> bool {
+        self.transmittance > 0.0
+    }
+
+    pub fn is_specular(&self) -> bool {
+        self.specular_reflectance.max_element() > 0.0 || self.is_dielectric()
+    }
+}
+
+/// One planar convex polygon of the scene (a triangle or a quad), counter-clockwise seen from its
+/// front.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Surface {
+    pub vertices: Vec<Vec3>,
+    pub material: u32,
+    /// Reflects and emits on both sides.
+    pub two_sided: bool,
+    /// Smooth-shading normals at the vertices (from the OBJ), for the specular term only.
+    pub shading_normals: Option<Vec<Vec3>>,
+    /// Name of the object or primitive the surface belongs to.
+    pub object: String,
+    pub source: SourceLoc,
+}
+
+/// A parsed scene: plain data, with the file it came from.
+#[derive(Clone, Debug)]
+pub struct SceneDescription {
+    pub path: PathBuf,
+    pub camera: Camera,
+    pub image: ImageSettings,
+    pub radiosity: RadiosityParams,
+    pub render: RenderParams,
+    pub materials: Vec<Material>,
+    pub surfaces: Vec<Surface>,
+    /// Non-fatal findings (degenerate faces skipped, no emitter, ...).
+    pub warnings: Vec<String>,
+}
+
+impl SceneDescription {
+    pub fn directory(&self) -> &Path {
+        self.path.parent().unwrap_or(Path::new("."))
+    }
+
+    pub fn has_emitter(&self) -> bool {
+        self.surfaces.iter().any(|s| self.materials[s.material as usize].is_emitter())
+    }
+}

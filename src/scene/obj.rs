@@ -1,0 +1,1 @@
+//! OBJ/MTL loading through tobj: the only user of tobj.
