@@ -1,6 +1,9 @@
 //! radray: a two-pass renderer. Pass one solves view-independent diffuse radiosity with hemicube form
 //! factors; pass two is a Whitted ray tracer whose diffuse term is the radiosity solution.
 
+// `!(x > 0.0)` is how this crate rejects NaN together with out-of-range values; keep it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod accel;
 pub mod film;
 pub mod mesh;

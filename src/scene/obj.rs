@@ -1,1 +1,196 @@
-//! OBJ/MTL loading through tobj: the only user of tobj.
+//! OBJ/MTL loading through tobj: the only user of tobj. Faces become `Surface`s (triangles and quads
+//! as they are, larger or non-convex polygons as triangle fans); MTL entries become `Material`s in
+//! radray's meanings (`Kd`, `Ke` radiance, `Ks`, `Ns`, `Ni`, `d`).
+
+use super::{Material, SourceLoc, Surface};
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+/// What went wrong reading an OBJ or MTL file.
+#[derive(Debug, thiserror::Error)]
+pub enum ObjError {
+    #[error("{path}: cannot read OBJ file: {source}")]
+    Read { path: PathBuf, source: std::io::Error },
+    #[error("{loc}: malformed OBJ: {message}")]
+    Malformed { loc: SourceLoc, message: String },
+    #[error("{path}: OBJ could not be loaded: {message}")]
+    Load { path: PathBuf, message: String },
+    #[error("{path}: material library could not be loaded: {message}")]
+    Mtl { path: PathBuf, message: String },
+    #[error("{path}: face uses material `{name}`, which its material library does not define")]
+    UnknownMaterial { path: PathBuf, name: String },
+}
+
+/// The surfaces and materials of one OBJ file. Material indices in `surfaces` are local to
+/// `materials`.
+#[derive(Debug, Default)]
+pub struct ObjContents {
+    pub surfaces: Vec<Surface>,
+    pub materials: Vec<Material>,
+    /// Faces without a material (given the default grey) and other notes.
+    pub warnings: Vec<String>,
+}
+
+/// Checks the OBJ text line by line for what tobj would reject without saying where: unparsable
+/// numbers and face indices out of range. Returns the first problem with its line.
+fn validate_text(path: &Path, text: &str) -> Result<(), ObjError> {
+    let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
+    for (k, line) in text.lines().enumerate() {
+        let fail =
+            |message: String| ObjError::Malformed { loc: SourceLoc { path: path.to_path_buf(), line: k + 1 }, message };
+        let line = line.split('#').next().unwrap_or("");
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else { continue };
+        let args: Vec<&str> = words.collect();
+        let numbers = |want: usize| -> Result<(), ObjError> {
+            if args.len() < want {
+                return Err(fail(format!("`{keyword}` needs {want} numbers, found {}", args.len())));
+            }
+            for a in &args {
+                match a.parse::<f64>() {
+                    Ok(x) if x.is_finite() => {}
+                    _ => return Err(fail(format!("`{a}` is not a finite number"))),
+                }
+            }
+            Ok(())
+        };
+        match keyword {
+            "v" => {
+                numbers(3)?;
+                v += 1;
+            }
+            "vt" => {
+                numbers(1)?;
+                vt += 1;
+            }
+            "vn" => {
+                numbers(3)?;
+                vn += 1;
+            }
+            "f" => {
+                if args.len() < 3 {
+                    return Err(fail(format!("a face needs at least 3 vertices, found {}", args.len())));
+                }
+                for a in &args {
+                    for (slot, (part, count)) in a.split('/').zip([v, vt, vn]).enumerate() {
+                        if part.is_empty() && slot > 0 {
+                            continue;
+                        }
+                        let index: i64 = part.parse().map_err(|_| fail(format!("bad face vertex `{a}`")))?;
+                        let resolved = if index < 0 { count + index + 1 } else { index };
+                        if index == 0 || resolved < 1 || resolved > count {
+                            return Err(fail(format!("face vertex `{a}` refers to an element that does not exist")));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+fn vec3(a: Option<[f32; 3]>) -> Vec3 {
+    a.map(Vec3::from).unwrap_or(Vec3::ZERO)
+}
+
+fn material_from_mtl(m: &tobj::Material) -> Material {
+    Material {
+        name: m.name.clone(),
+        diffuse_reflectance: vec3(m.diffuse),
+        emitted_radiance: vec3(m.emissive),
+        specular_reflectance: vec3(m.specular),
+        // Only an explicit, positive and finite `Ns` asks for a highlight.
+        phong_exponent: m.shininess.filter(|&n| n > 0.0 && n.is_finite()),
+        ior: m.optical_density.unwrap_or(1.0),
+        transmittance: 1.0 - m.dissolve.unwrap_or(1.0),
+    }
+}
+
+/// Loads an OBJ file and its MTL library.
+pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ObjError::Read { path: path.to_path_buf(), source })?;
+    validate_text(path, &text)?;
+    let options = tobj::LoadOptions { single_index: true, triangulate: false, ignore_points: true, ignore_lines: true };
+    let (models, materials) = tobj::load_obj(path, &options)
+        .map_err(|e| ObjError::Load { path: path.to_path_buf(), message: e.to_string() })?;
+    let materials = materials.map_err(|e| ObjError::Mtl { path: path.to_path_buf(), message: e.to_string() })?;
+
+    let mut out = ObjContents { materials: materials.iter().map(material_from_mtl).collect(), ..Default::default() };
+    let mut default_material = None;
+    let loc = SourceLoc { path: path.to_path_buf(), line: 0 };
+    for model in &models {
+        let mesh = &model.mesh;
+        let material = match mesh.material_id {
+            Some(id) if id < out.materials.len() => id as u32,
+            Some(id) => return Err(ObjError::UnknownMaterial { path: path.to_path_buf(), name: format!("#{id}") }),
+            None => *default_material.get_or_insert_with(|| {
+                out.warnings.push(format!(
+                    "{}: object `{}` has no material; using grey Kd 0.5",
+                    path.display(),
+                    model.name
+                ));
+                out.materials.push(Material::diffuse("default", Vec3::splat(0.5)));
+                out.materials.len() as u32 - 1
+            }),
+        };
+        let position = |i: u32| {
+            Vec3::new(
+                mesh.positions[3 * i as usize],
+                mesh.positions[3 * i as usize + 1],
+                mesh.positions[3 * i as usize + 2],
+            )
+        };
+        let normal = |i: u32| {
+            (mesh.normals.len() >= 3 * (i as usize + 1)).then(|| {
+                Vec3::new(
+                    mesh.normals[3 * i as usize],
+                    mesh.normals[3 * i as usize + 1],
+                    mesh.normals[3 * i as usize + 2],
+                )
+            })
+        };
+        let arities: Vec<u32> =
+            if mesh.face_arities.is_empty() { vec![3; mesh.indices.len() / 3] } else { mesh.face_arities.clone() };
+        let mut start = 0usize;
+        for arity in arities {
+            let idx = &mesh.indices[start..start + arity as usize];
+            start += arity as usize;
+            let vertices: Vec<Vec3> = idx.iter().map(|&i| position(i)).collect();
+            let normals: Option<Vec<Vec3>> = idx.iter().map(|&i| normal(i)).collect();
+            out.surfaces.push(Surface {
+                vertices,
+                material,
+                two_sided,
+                shading_normals: normals,
+                object: model.name.clone(),
+                source: loc.clone(),
+            });
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validator_reports_the_line_of_a_bad_face() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n";
+        let err = validate_text(Path::new("x.obj"), text).unwrap_err();
+        assert!(err.to_string().starts_with("x.obj:5:"), "{err}");
+    }
+
+    #[test]
+    fn validator_rejects_non_finite_positions() {
+        let err = validate_text(Path::new("x.obj"), "v 0 nan 0\n").unwrap_err();
+        assert!(err.to_string().contains("x.obj:1:"), "{err}");
+    }
+
+    #[test]
+    fn validator_accepts_negative_and_slashed_indices() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf -3//1 -2//1 -1//1\n";
+        validate_text(Path::new("x.obj"), text).unwrap();
+    }
+}
