@@ -5,9 +5,11 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod cli;
 pub mod film;
 pub mod mesh;
 pub mod output;
+pub mod progress;
 pub mod radiosity;
 pub mod rng;
 pub mod scene;
