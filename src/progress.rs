@@ -63,7 +63,7 @@ impl Progress {
     /// A message above the bars (warnings); shown unless quiet.
     pub fn note(&self, message: &str) {
         if self.verbosity != Verbosity::Quiet {
-            let _ = self.multi.suspend(|| eprintln!("{message}"));
+            self.multi.suspend(|| eprintln!("{message}"));
         }
     }
 }
