@@ -82,6 +82,31 @@ fn segments(len: f32, max_edge: f32) -> u32 {
     ((len / max_edge) * (1.0 - 1e-6)).ceil().max(1.0) as u32
 }
 
+/// Elements `Mesh::build` would make of `scene` at `max_element_edge`, counted without building
+/// anything (so a run can refuse an impossible mesh before allocating it).
+pub fn count_elements(scene: &SceneDescription, max_element_edge: f32) -> u64 {
+    scene
+        .surfaces
+        .iter()
+        .map(|s| {
+            let q = &s.vertices;
+            let per_side = if q.len() == 4 {
+                let nu = segments((q[1] - q[0]).length().max((q[2] - q[3]).length()), max_element_edge) as u64;
+                let nv = segments((q[3] - q[0]).length().max((q[2] - q[1]).length()), max_element_edge) as u64;
+                nu * nv
+            } else {
+                let longest = (0..q.len()).map(|k| (q[(k + 1) % q.len()] - q[k]).length()).fold(0.0, f32::max);
+                (segments(longest, max_element_edge) as u64).pow(2)
+            };
+            if s.two_sided {
+                2 * per_side
+            } else {
+                per_side
+            }
+        })
+        .sum()
+}
+
 impl Mesh {
     /// Cuts every surface of the scene into elements of at most `max_element_edge` (see module docs).
     pub fn build(scene: &SceneDescription, max_element_edge: f32) -> Mesh {

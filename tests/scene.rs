@@ -214,3 +214,14 @@ fn two_sided_surfaces_get_a_back_side() {
     }
     assert!(mesh.triangle_back_element.iter().all(|&b| b != radray::mesh::NONE));
 }
+
+#[test]
+fn element_count_is_known_before_meshing() {
+    let s = scene::load(&scenes_dir().join("cornell_box.toml")).unwrap();
+    for edge in [100.0, 25.0, 20.0] {
+        let mesh = Mesh::build(&s, edge);
+        assert_eq!(radray::mesh::count_elements(&s, edge), mesh.elements.len() as u64, "edge {edge}");
+    }
+    // A count far beyond any machine is computed without allocating it.
+    assert!(radray::mesh::count_elements(&s, 1e-3) > 1_000_000_000);
+}
