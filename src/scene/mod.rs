@@ -243,3 +243,50 @@ impl SceneDescription {
         self.surfaces.iter().any(|s| self.materials[s.material as usize].is_emitter())
     }
 }
+
+/// Named presets that fix element size, hemicube resolution, samples per pixel and light samples
+/// together. Element size is relative to the scene's bounding-box diagonal, so a preset means the
+/// same on a scene in millimetres and one in metres.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Quality {
+    /// Diagonal / 20 elements, 64² hemicubes, 4 spp, 1 light sample: seconds, blotchy shadows.
+    Preview,
+    /// Diagonal / 40, 128², 16 spp, 4 light samples.
+    Default,
+    /// Diagonal / 70 (about 10k elements in the Cornell box), 256², 64 spp, 16 light samples.
+    High,
+}
+
+impl Quality {
+    /// (diagonal divisor, hemicube resolution, samples per pixel, light samples)
+    pub fn settings(self) -> (f32, u32, u32, u32) {
+        match self {
+            Quality::Preview => (20.0, 64, 4, 1),
+            Quality::Default => (40.0, 128, 16, 4),
+            Quality::High => (70.0, 256, 64, 16),
+        }
+    }
+}
+
+impl SceneDescription {
+    /// Length of the diagonal of the scene's bounding box.
+    pub fn diagonal(&self) -> f32 {
+        let (lo, hi) = self
+            .surfaces
+            .iter()
+            .flat_map(|s| s.vertices.iter())
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        (hi - lo).length()
+    }
+
+    /// Sets element size, hemicube resolution, samples and light samples from a preset.
+    pub fn apply_quality(&mut self, quality: Quality) {
+        let (divisor, resolution, spp, light_samples) = quality.settings();
+        self.radiosity.max_element_edge = self.diagonal() / divisor;
+        self.radiosity.hemicube_resolution_px = resolution;
+        self.image.samples_per_pixel = spp;
+        self.image.adaptive_max_samples = self.image.adaptive_max_samples.max(spp);
+        self.render.light_samples = light_samples;
+    }
+}

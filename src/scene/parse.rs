@@ -23,6 +23,8 @@ type S<T> = Spanned<T>;
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawScene {
+    /// A named preset laid under the explicit settings of the file.
+    quality: Option<Quality>,
     camera: Option<S<RawCamera>>,
     image: Option<RawImage>,
     radiosity: Option<RawRadiosity>,
@@ -415,14 +417,24 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
             Camera { eye: centre - Vec3::Z * (2.0 * extent), look_at: centre, up: Vec3::Y, vfov_deg: 40.0 }
         }
     };
-    let image = image_settings(&loc, raw.image.as_ref())?;
-    let diagonal = (bounds.1 - bounds.0).length();
-    let radiosity = radiosity_params(&loc, raw.radiosity.as_ref(), diagonal)?;
-    let render = render_params(&loc, raw.render.as_ref())?;
-
-    let scene =
-        SceneDescription { path: path.to_path_buf(), camera, image, radiosity, render, materials, surfaces, warnings };
-    let mut scene = scene;
+    let mut scene = SceneDescription {
+        path: path.to_path_buf(),
+        camera,
+        image: ImageSettings::default(),
+        radiosity: RadiosityParams::default(),
+        render: RenderParams::default(),
+        materials,
+        surfaces,
+        warnings,
+    };
+    // Defaults (about 30 elements along the scene's diagonal), then the preset, then the file's keys.
+    scene.radiosity.max_element_edge = scene.diagonal() / 30.0;
+    if let Some(q) = raw.quality {
+        scene.apply_quality(q);
+    }
+    scene.image = image_settings(&loc, raw.image.as_ref(), scene.image.clone())?;
+    scene.radiosity = radiosity_params(&loc, raw.radiosity.as_ref(), scene.radiosity.clone())?;
+    scene.render = render_params(&loc, raw.render.as_ref(), scene.render.clone())?;
     if !scene.has_emitter() {
         scene.warnings.push(format!(
             "{}: the scene has no emitter (no material with ke > 0): the solution is black",
@@ -526,8 +538,8 @@ fn camera(loc: &Locator, c: &S<RawCamera>) -> Result<Camera, SceneError> {
     Ok(Camera { eye, look_at, up, vfov_deg: vfov })
 }
 
-fn image_settings(loc: &Locator, raw: Option<&RawImage>) -> Result<ImageSettings, SceneError> {
-    let mut s = ImageSettings::default();
+fn image_settings(loc: &Locator, raw: Option<&RawImage>, base: ImageSettings) -> Result<ImageSettings, SceneError> {
+    let mut s = base;
     let Some(r) = raw else { return Ok(s) };
     s.width_px = loc.positive_int(&r.width, "width", 1, 16384, s.width_px)?;
     s.height_px = loc.positive_int(&r.height, "height", 1, 16384, s.height_px)?;
@@ -566,10 +578,9 @@ pub fn default_filter_radius(f: FilterKind) -> f32 {
 fn radiosity_params(
     loc: &Locator,
     raw: Option<&RawRadiosity>,
-    scene_diagonal: f32,
+    base: RadiosityParams,
 ) -> Result<RadiosityParams, SceneError> {
-    // Default element size: about 30 elements along the scene's diagonal.
-    let mut p = RadiosityParams { max_element_edge: scene_diagonal / 30.0, ..Default::default() };
+    let mut p = base;
     let Some(r) = raw else { return Ok(p) };
     if let Some(e) = loc.ranged(&r.max_element_edge, "max_element_edge", |x| x > 0.0, "a positive length")? {
         p.max_element_edge = e;
@@ -601,8 +612,8 @@ fn radiosity_params(
     Ok(p)
 }
 
-fn render_params(loc: &Locator, raw: Option<&RawRender>) -> Result<RenderParams, SceneError> {
-    let mut p = RenderParams::default();
+fn render_params(loc: &Locator, raw: Option<&RawRender>, base: RenderParams) -> Result<RenderParams, SceneError> {
+    let mut p = base;
     let Some(r) = raw else { return Ok(p) };
     if let Some(d) = r.direct {
         p.direct = d;
