@@ -7,7 +7,7 @@ pub mod parse;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
-pub use parse::{load, parse_str, SceneError};
+pub use parse::{check_camera, check_material, load, parse_str, SceneError};
 
 /// Where a piece of scene data came from, for error messages and warnings (pbrt's `FileLoc`).
 #[derive(Clone, Debug, PartialEq, Eq, Default)]

@@ -516,26 +516,54 @@ pub fn check_material(m: &Material) -> Result<(), (MaterialField, String)> {
     Ok(())
 }
 
+/// Checks that a camera can form an image: a field of view in (0°, 180°), `eye` away from `look_at`,
+/// and `up` neither zero nor parallel to the view direction.
+pub fn check_camera(c: &Camera) -> Result<(), (CameraField, String)> {
+    if !(c.vfov_deg.is_finite() && c.vfov_deg > 0.0 && c.vfov_deg < 180.0) {
+        return Err((CameraField::VfovDeg, format!("vfov_deg must lie in (0, 180) degrees, got {}", c.vfov_deg)));
+    }
+    if !(c.eye.is_finite() && c.look_at.is_finite() && c.up.is_finite()) {
+        return Err((CameraField::Eye, "eye, look_at and up must be finite".to_string()));
+    }
+    let forward = c.look_at - c.eye;
+    if !(forward.length() > 1e-6 * c.eye.length().max(1.0)) {
+        return Err((CameraField::LookAt, "look_at must differ from eye".to_string()));
+    }
+    if !(c.up.length() > 0.0) || forward.normalize().cross(c.up.normalize()).length() < 1e-4 {
+        return Err((CameraField::Up, "up must not be zero or parallel to the view direction".to_string()));
+    }
+    Ok(())
+}
+
+/// Which camera key `check_camera` found wrong.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraField {
+    Eye,
+    LookAt,
+    Up,
+    VfovDeg,
+}
+
 fn camera(loc: &Locator, c: &S<RawCamera>) -> Result<Camera, SceneError> {
     let r = c.get_ref();
     let eye = loc.finite3(&r.eye, "eye")?;
     let look_at = loc.finite3(&r.look_at, "look_at")?;
-    let up = if r.up.span() == (0..0) { Vec3::Y } else { loc.finite3(&r.up, "up")? };
-    let vfov = *r.vfov_deg.get_ref();
-    if !(vfov.is_finite() && vfov > 0.0 && vfov < 180.0) {
-        return loc.error(r.vfov_deg.span(), format!("vfov_deg must lie in (0, 180) degrees, got {vfov}"));
+    let explicit_up = r.up.span() != (0..0);
+    let up = if explicit_up { loc.finite3(&r.up, "up")? } else { Vec3::Y };
+    let camera = Camera { eye, look_at, up, vfov_deg: *r.vfov_deg.get_ref() };
+    match check_camera(&camera) {
+        Ok(()) => Ok(camera),
+        Err((field, message)) => {
+            let span = match field {
+                CameraField::Eye => r.eye.span(),
+                CameraField::LookAt => r.look_at.span(),
+                CameraField::Up if explicit_up => r.up.span(),
+                CameraField::Up => c.span(),
+                CameraField::VfovDeg => r.vfov_deg.span(),
+            };
+            loc.error(span, message)
+        }
     }
-    let forward = look_at - eye;
-    if !(forward.length() > 1e-6 * eye.length().max(1.0)) {
-        return loc.error(r.look_at.span(), "look_at must differ from eye");
-    }
-    if !(up.length() > 0.0) || forward.normalize().cross(up.normalize()).length() < 1e-4 {
-        return loc.error(
-            if r.up.span() == (0..0) { c.span() } else { r.up.span() },
-            "up must not be zero or parallel to the view direction",
-        );
-    }
-    Ok(Camera { eye, look_at, up, vfov_deg: vfov })
 }
 
 fn image_settings(loc: &Locator, raw: Option<&RawImage>, base: ImageSettings) -> Result<ImageSettings, SceneError> {
