@@ -5,7 +5,7 @@
 //! Hot per-element data is kept as a struct of arrays (`Elements`); each element is also split into
 //! one or two triangles for ray tracing (`Mesh::triangles`).
 
-use crate::scene::{Material, SceneDescription};
+use crate::scene::{Material, SceneDescription, Surface};
 use glam::Vec3;
 
 /// Marks "no index" in `u32` index arrays (the fourth corner of a triangle, a missing back side).
@@ -85,26 +85,25 @@ fn segments(len: f32, max_edge: f32) -> u32 {
 /// Elements `Mesh::build` would make of `scene` at `max_element_edge`, counted without building
 /// anything (so a run can refuse an impossible mesh before allocating it).
 pub fn count_elements(scene: &SceneDescription, max_element_edge: f32) -> u64 {
-    scene
-        .surfaces
-        .iter()
-        .map(|s| {
-            let q = &s.vertices;
-            let per_side = if q.len() == 4 {
-                let nu = segments((q[1] - q[0]).length().max((q[2] - q[3]).length()), max_element_edge) as u64;
-                let nv = segments((q[3] - q[0]).length().max((q[2] - q[1]).length()), max_element_edge) as u64;
-                nu * nv
-            } else {
-                let longest = (0..q.len()).map(|k| (q[(k + 1) % q.len()] - q[k]).length()).fold(0.0, f32::max);
-                (segments(longest, max_element_edge) as u64).pow(2)
-            };
-            if s.two_sided {
-                2 * per_side
-            } else {
-                per_side
-            }
-        })
-        .sum()
+    scene.surfaces.iter().map(|s| count_surface_elements(s, max_element_edge)).sum()
+}
+
+/// Elements one surface becomes (both sides of a two-sided one).
+pub fn count_surface_elements(surface: &Surface, max_element_edge: f32) -> u64 {
+    let q = &surface.vertices;
+    let per_side = if q.len() == 4 {
+        let nu = segments((q[1] - q[0]).length().max((q[2] - q[3]).length()), max_element_edge) as u64;
+        let nv = segments((q[3] - q[0]).length().max((q[2] - q[1]).length()), max_element_edge) as u64;
+        nu * nv
+    } else {
+        let longest = (0..q.len()).map(|k| (q[(k + 1) % q.len()] - q[k]).length()).fold(0.0, f32::max);
+        (segments(longest, max_element_edge) as u64).pow(2)
+    };
+    if surface.two_sided {
+        2 * per_side
+    } else {
+        per_side
+    }
 }
 
 impl Mesh {
