@@ -607,3 +607,29 @@ fn tracer_rejects_a_solution_of_another_mesh() {
     assert!(Tracer::new(&mesh, &accel, &wrong, &scene.materials, &RenderParams::default()).is_ok());
     assert!(Tracer::new(&mesh, &accel, &shorter, &scene.materials, &RenderParams::default()).is_err());
 }
+
+#[test]
+fn shading_normals_bend_mirror_rays() {
+    // A flat mirror in z = 0 whose vertex normals all lean 10° towards +x: a ray straight down
+    // leaves at 20° from the vertical and reaches a wall strip (x ≥ 1 at z = 5; 5·tan 20° = 1.82)
+    // that the geometric reflection (straight up, x = 0) misses.
+    let mirror = Material { specular_reflectance: Vec3::splat(0.9), ..Material::diffuse("mirror", Vec3::ZERO) };
+    let wall = Material::diffuse("wall", Vec3::splat(0.5));
+    let tilt = 10f32.to_radians();
+    let mut mirror_surface = z_quad(0.0, 10.0, true, 0, false);
+    mirror_surface.shading_normals = Some(vec![vec3(tilt.sin(), 0.0, tilt.cos()); 4]);
+    let wall_surface =
+        surface([vec3(1.0, -10.0, 5.0), vec3(1.0, 10.0, 5.0), vec3(10.0, 10.0, 5.0), vec3(10.0, -10.0, 5.0)], 1, false);
+    let scene = scene(vec![mirror, wall], vec![mirror_surface, wall_surface]);
+    let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+        (per_surface(mesh, &[Vec3::ZERO, Vec3::splat(PI)]), vec![Vec3::ZERO; mesh.elements.len()])
+    });
+    assert!(setup.mesh.elements.normal[1].z < 0.0, "the wall faces the mirror");
+    let params = RenderParams::default();
+    let flat = setup.tracer(&params);
+    let smooth = setup.tracer(&params).with_shading_normals(&scene.surfaces);
+    let origin = vec3(0.0, 0.0, 1.0);
+    assert_eq!(trace(&flat, origin, Vec3::NEG_Z, TraceMode::Final), Vec3::ZERO);
+    // 0.9 × the wall's radiance 1, a few f32 roundings.
+    assert_close(trace(&smooth, origin, Vec3::NEG_Z, TraceMode::Final), Vec3::splat(0.9), 1e-6, "smooth mirror");
+}

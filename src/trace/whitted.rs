@@ -13,7 +13,7 @@ use crate::accel::Accel;
 use crate::mesh::{Mesh, NONE};
 use crate::radiosity::Solution;
 use crate::rng::Pcg32;
-use crate::scene::{DirectMode, Material, RenderParams};
+use crate::scene::{DirectMode, Material, RenderParams, Surface};
 
 /// What the tracer returns per ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -110,6 +110,8 @@ pub struct Tracer<'a> {
     emitters: Emitters,
     /// Distance ray origins are moved off a surface (scene units).
     offset: f32,
+    /// The scene's surfaces, when their smooth-shading normals should bend specular rays.
+    surfaces: Option<&'a [Surface]>,
 }
 
 /// Which element a ray hit and on which side.
@@ -190,7 +192,58 @@ impl<'a> Tracer<'a> {
             max_depth: params.max_depth.min(MAX_DEPTH_LIMIT),
             emitters,
             offset: RELATIVE_OFFSET * scale,
+            surfaces: None,
         })
+    }
+
+    /// Uses the surfaces' smooth-shading normals (`Surface::shading_normals`, the scene the mesh was
+    /// built from) for mirror, dielectric and highlight directions. The geometric normal still decides
+    /// the side hit and offsets ray origins.
+    pub fn with_shading_normals(mut self, surfaces: &'a [Surface]) -> Self {
+        self.surfaces = Some(surfaces);
+        self
+    }
+
+    /// The shading normal at `p` on the element's scene surface, oriented like `facing`: the
+    /// surface's vertex normals interpolated linearly over the triangle (a quad: over the fan
+    /// triangle (0,1,2) or (0,2,3) holding p). Falls back to `facing` where there is none or where it
+    /// faces away from `incoming`.
+    fn shading_normal(&self, element: usize, p: Vec3, facing: Vec3, incoming: Vec3) -> Vec3 {
+        let Some(surfaces) = self.surfaces else {
+            return facing;
+        };
+        let mesh_surface = self.mesh.elements.surface[element] as usize;
+        let Some(surface) = self.mesh.surface_source.get(mesh_surface).and_then(|&s| surfaces.get(s as usize)) else {
+            return facing;
+        };
+        let Some(normals) = &surface.shading_normals else {
+            return facing;
+        };
+        if normals.len() != surface.vertices.len() || surface.vertices.len() < 3 {
+            return facing;
+        }
+        let v = &surface.vertices;
+        let barycentric = |a: Vec3, b: Vec3, c: Vec3| {
+            let n = (b - a).cross(c - a);
+            let inv = 1.0 / n.length_squared();
+            let w1 = (p - a).cross(c - a).dot(n) * inv;
+            let w2 = (b - a).cross(p - a).dot(n) * inv;
+            (1.0 - w1 - w2, w1, w2)
+        };
+        let (w0, w1, w2) = barycentric(v[0], v[1], v[2]);
+        let n = if v.len() == 4 && w1 < 0.0 {
+            let (u0, u2, u3) = barycentric(v[0], v[2], v[3]);
+            normals[0] * u0 + normals[2] * u2 + normals[3] * u3
+        } else {
+            normals[0] * w0 + normals[1] * w1 + normals[2] * w2
+        };
+        let n = n.normalize_or_zero();
+        let n = if n.dot(facing) < 0.0 { -n } else { n };
+        if n.dot(incoming) < 0.0 {
+            n
+        } else {
+            facing
+        }
     }
 
     /// Total area of the emitting triangles (scene units²).
@@ -249,13 +302,19 @@ impl<'a> Tracer<'a> {
             } else {
                 None
             };
-            // The normal on the side the ray arrives from.
+            // The geometric normal on the side the ray arrives from.
             let facing = if front { normal } else { -normal };
             let bary = [1.0 - hit.u - hit.v, hit.u, hit.v];
             let [i0, i1, i2] = mesh.triangles[t];
             let p = mesh.positions[i0 as usize] * bary[0]
                 + mesh.positions[i1 as usize] * bary[1]
                 + mesh.positions[i2 as usize] * bary[2];
+            // The normal that bends specular rays (the geometric one unless smooth shading applies).
+            let shading = if mode == TraceMode::Final && material.is_specular() {
+                self.shading_normal(front_element, p, facing, ray.dir)
+            } else {
+                facing
+            };
 
             if let Some(side) = &side {
                 let exitance = interpolate(&self.solution.vertex_exitance, side.vertices, bary);
@@ -265,7 +324,9 @@ impl<'a> Tracer<'a> {
                 }
                 let reflectance = elements.reflectance[side.element];
                 let highlight = match material.phong_exponent {
-                    Some(n) if material.specular_reflectance.max_element() > 0.0 => Some((reflect(ray.dir, facing), n)),
+                    Some(n) if material.specular_reflectance.max_element() > 0.0 => {
+                        Some((reflect(ray.dir, shading), n))
+                    }
                     _ => None,
                 };
                 let pixel_direct = self.params.direct == DirectMode::Pixel;
@@ -307,18 +368,22 @@ impl<'a> Tracer<'a> {
             };
             if material.is_dielectric() {
                 let (eta_i, eta_t) = if front { (1.0, material.ior) } else { (material.ior, 1.0) };
-                let cos_i = -ray.dir.dot(facing);
+                let cos_i = -ray.dir.dot(shading);
                 let reflectance = fresnel_dielectric(cos_i, eta_i, eta_t);
-                push(above, reflect(ray.dir, facing), ray.throughput * material.specular_reflectance * reflectance);
+                push(
+                    above,
+                    mirror(ray.dir, shading, facing),
+                    ray.throughput * material.specular_reflectance * reflectance,
+                );
                 if reflectance < 1.0 {
-                    if let Some(refracted) = refract(ray.dir, facing, eta_i / eta_t) {
+                    if let Some(refracted) = refract(ray.dir, shading, eta_i / eta_t).filter(|t| t.dot(facing) < 0.0) {
                         let below = p - facing * self.offset;
                         let weight = (1.0 - reflectance) * material.transmittance;
                         push(below, refracted.normalize(), ray.throughput * weight);
                     }
                 }
             } else if material.specular_reflectance.max_element() > 0.0 {
-                push(above, reflect(ray.dir, facing), ray.throughput * material.specular_reflectance);
+                push(above, mirror(ray.dir, shading, facing), ray.throughput * material.specular_reflectance);
             }
         }
         radiance
@@ -400,6 +465,17 @@ impl<'a> Tracer<'a> {
             }
         }
         (irradiance, phong)
+    }
+}
+
+/// Mirror direction of `d` about the shading normal, or about the geometric normal `facing` when the
+/// shading normal would send it below the surface.
+fn mirror(d: Vec3, shading: Vec3, facing: Vec3) -> Vec3 {
+    let r = reflect(d, shading);
+    if r.dot(facing) > 0.0 {
+        r
+    } else {
+        reflect(d, facing)
     }
 }
 
