@@ -153,6 +153,33 @@ fn incoherent_rays(count: usize) -> Vec<(Vec3, Vec3)> {
         .collect()
 }
 
+/// CPU time of the calling thread (seconds), from /proc (Linux; clock ticks of 1/100 s): on a machine
+/// shared with other jobs, wall time overstates the cost.
+fn thread_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+/// Runs `f` (which traces `rays_per_call` rays) repeatedly for about a second of CPU time and prints
+/// rays per CPU second.
+fn report_cpu_rate(name: &str, rays_per_call: u64, mut f: impl FnMut()) {
+    let (Some(start), wall) = (thread_cpu_seconds(), Instant::now()) else {
+        return;
+    };
+    let mut calls = 0u64;
+    let mut cpu = 0.0;
+    while cpu < 1.0 && wall.elapsed().as_secs_f64() < 20.0 {
+        f();
+        calls += 1;
+        cpu = thread_cpu_seconds().unwrap_or(start) - start;
+    }
+    if cpu > 0.0 {
+        eprintln!("{name}: {:.2} M rays per CPU second", (calls * rays_per_call) as f64 / cpu / 1e6);
+    }
+}
+
 fn bench_trace(c: &mut Criterion) {
     let scene = cornell_spheres();
     let mesh = Mesh::build(&scene, f32::INFINITY);
@@ -165,11 +192,19 @@ fn bench_trace(c: &mut Criterion) {
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let primary = camera_rays(&scene, 256);
     group.throughput(Throughput::Elements(primary.len() as u64));
+    let trace_all = |rays: &[(Vec3, Vec3)]| {
+        black_box(rays.iter().filter(|(o, d)| accel.closest_hit(*o, *d, 0.0, f32::INFINITY).is_some()).count());
+    };
+    report_cpu_rate("closest_hit_camera_rays", primary.len() as u64, || trace_all(&primary));
     group.bench_function("closest_hit_camera_rays", |b| {
         b.iter(|| primary.iter().filter(|(o, d)| accel.closest_hit(*o, *d, 0.0, f32::INFINITY).is_some()).count())
     });
     let incoherent = incoherent_rays(65_536);
     group.throughput(Throughput::Elements(incoherent.len() as u64));
+    report_cpu_rate("closest_hit_incoherent_rays", incoherent.len() as u64, || trace_all(&incoherent));
+    report_cpu_rate("occluded_incoherent_rays", incoherent.len() as u64, || {
+        black_box(incoherent.iter().filter(|(o, d)| accel.occluded(*o, *d, 300.0)).count());
+    });
     group.bench_function("closest_hit_incoherent_rays", |b| {
         b.iter(|| incoherent.iter().filter(|(o, d)| accel.closest_hit(*o, *d, 0.0, f32::INFINITY).is_some()).count())
     });
@@ -189,17 +224,18 @@ fn bench_trace(c: &mut Criterion) {
         let tracer = Tracer::new(&mesh, &accel, &solution, &scene.materials, &params).expect("consistent");
         // Rays per sample, reported once (criterion reports samples/s).
         let mut counts = RayCounts::default();
-        let start = Instant::now();
         for (i, (o, d)) in samples.iter().enumerate() {
             let mut rng = Pcg32::new(0, i as u64);
             black_box(tracer.radiance(*o, *d, TraceMode::Final, &mut rng, &mut counts));
         }
-        let seconds = start.elapsed().as_secs_f64();
-        eprintln!(
-            "{name}: {:.3} rays/sample ({counts:?}), {:.2} M rays/s single-threaded",
-            counts.total() as f64 / samples.len() as f64,
-            counts.total() as f64 / seconds / 1e6
-        );
+        eprintln!("{name}: {:.3} rays/sample ({counts:?})", counts.total() as f64 / samples.len() as f64);
+        report_cpu_rate(name, counts.total(), || {
+            let mut counts = RayCounts::default();
+            for (i, (o, d)) in samples.iter().enumerate() {
+                let mut rng = Pcg32::new(0, i as u64);
+                black_box(tracer.radiance(*o, *d, TraceMode::Final, &mut rng, &mut counts));
+            }
+        });
         group.bench_function(name, |b| {
             b.iter(|| {
                 let mut counts = RayCounts::default();

@@ -81,7 +81,7 @@ impl Accel {
     /// The closest hit with t in (`t_min`, `t_max`], front or back side. `dir` need not be unit
     /// length; `t` is in units of it.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
-        if self.is_empty() || t_max.is_nan() || t_min.is_nan() || t_max <= t_min {
+        if self.is_empty() || !valid_ray(origin, dir) || t_max.is_nan() || t_min.is_nan() || t_max <= t_min {
             return None;
         }
         let ray = WatertightRay::new(origin, dir);
@@ -105,7 +105,7 @@ impl Accel {
 
     /// Whether anything lies on the ray with t in (0, `t_max`] (any hit, either side).
     pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        if self.is_empty() || t_max.is_nan() || t_max <= 0.0 {
+        if self.is_empty() || !valid_ray(origin, dir) || t_max.is_nan() || t_max <= 0.0 {
             return false;
         }
         let ray = WatertightRay::new(origin, dir);
@@ -117,6 +117,11 @@ impl Accel {
             }
         })
     }
+}
+
+/// A finite origin and a finite, non-zero direction (anything else hits nothing).
+fn valid_ray(origin: Vec3, dir: Vec3) -> bool {
+    origin.is_finite() && dir.is_finite() && dir != Vec3::ZERO
 }
 
 /// A ray/triangle intersection: distance and barycentrics (p = (1 − u − v)·v0 + u·v1 + v·v2).
@@ -286,6 +291,16 @@ mod tests {
         let accel = Accel::build(&[], &[]);
         assert!(accel.closest_hit(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY).is_none());
         assert!(!accel.occluded(Vec3::ZERO, Vec3::X, f32::INFINITY));
+    }
+
+    #[test]
+    fn degenerate_rays_hit_nothing() {
+        let positions = [vec3(0.0, 0.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0)];
+        let accel = Accel::build(&positions, &[[0, 1, 2]]);
+        for dir in [Vec3::ZERO, Vec3::NAN, vec3(0.0, 0.0, f32::INFINITY)] {
+            assert!(accel.closest_hit(vec3(0.2, 0.2, 1.0), dir, 0.0, f32::INFINITY).is_none());
+            assert!(!accel.occluded(vec3(0.2, 0.2, 1.0), dir, 10.0));
+        }
     }
 
     #[test]

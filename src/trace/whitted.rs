@@ -72,7 +72,7 @@ pub enum TraceError {
 }
 
 /// Deepest ray tree the fixed-size stack supports; `RenderParams::max_depth` is clamped to it.
-pub const MAX_DEPTH_LIMIT: u32 = 62;
+pub const MAX_DEPTH_LIMIT: u32 = 30;
 /// A depth-first walk pops one ray and pushes at most two one level deeper, so the stack never holds
 /// more than `max_depth + 2` rays.
 const STACK_SIZE: usize = MAX_DEPTH_LIMIT as usize + 2;
