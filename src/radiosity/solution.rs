@@ -58,7 +58,9 @@ pub enum SolutionFileError {
          re-run `radray solve`"
     )]
     UnsupportedVersion { path: PathBuf, found: u32, supported: u32 },
-    #[error("{path} is truncated: {actual_bytes} bytes where its header announces {expected_bytes}; re-run `radray solve`")]
+    #[error(
+        "{path} is truncated: {actual_bytes} bytes where its header announces {expected_bytes}; re-run `radray solve`"
+    )]
     Truncated { path: PathBuf, expected_bytes: u64, actual_bytes: u64 },
     #[error("{path} is corrupted ({reason}); re-run `radray solve`")]
     Corrupted { path: PathBuf, reason: String },
@@ -239,7 +241,8 @@ impl Solution {
         for r in &self.stats.residual_history {
             out.extend_from_slice(&r.to_le_bytes());
         }
-        for values in [&self.element_exitance, &self.element_direct_exitance, &self.vertex_exitance, &self.vertex_direct_exitance]
+        for values in
+            [&self.element_exitance, &self.element_direct_exitance, &self.vertex_exitance, &self.vertex_direct_exitance]
         {
             for v in values.iter() {
                 for c in v.to_array() {
@@ -269,7 +272,11 @@ impl Solution {
         };
         let version = r.u32().ok_or_else(truncated_header)?;
         if version != FILE_VERSION {
-            return Err(SolutionFileError::UnsupportedVersion { path: path(), found: version, supported: FILE_VERSION });
+            return Err(SolutionFileError::UnsupportedVersion {
+                path: path(),
+                found: version,
+                supported: FILE_VERSION,
+            });
         }
         let n = r.u64().ok_or_else(truncated_header)?;
         let m = r.u64().ok_or_else(truncated_header)?;
@@ -307,7 +314,11 @@ impl Solution {
             _ => return Err(corrupted("converged flag is neither 0 nor 1")),
         };
         if found_fingerprint != expected_fingerprint {
-            return Err(SolutionFileError::Stale { path: path(), expected: expected_fingerprint, found: found_fingerprint });
+            return Err(SolutionFileError::Stale {
+                path: path(),
+                expected: expected_fingerprint,
+                found: found_fingerprint,
+            });
         }
         // The length check above guarantees every read below succeeds.
         let (n, m, h) = (n as usize, m as usize, h as usize);
@@ -338,8 +349,7 @@ impl Solution {
     /// Reads a solution saved by `save`, refusing a file that is foreign, of another format version,
     /// truncated, corrupted, or computed for another mesh (`expected_fingerprint` = `fingerprint(mesh)`).
     pub fn load(path: &Path, expected_fingerprint: u64) -> Result<Solution, SolutionFileError> {
-        let bytes =
-            std::fs::read(path).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
+        let bytes = std::fs::read(path).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
         Solution::from_bytes(&bytes, path, expected_fingerprint)
     }
 }

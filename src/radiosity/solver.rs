@@ -176,7 +176,7 @@ pub fn shoot(
 /// per channel. For display only: element i is shown as B_i + ρ_i · ambient.
 pub fn ambient_exitance(reflectance: &[DVec3], area: &[f64], unshot_exitance: &[DVec3]) -> DVec3 {
     let total_area: f64 = area.iter().sum();
-    if !(total_area > 0.0) {
+    if total_area.is_nan() || total_area <= 0.0 {
         return DVec3::ZERO;
     }
     let mut weighted_reflectance = DVec3::ZERO;
@@ -357,8 +357,7 @@ fn gathering(
     params: &RadiosityParams,
     on_iteration: &mut dyn FnMut(u32, f64),
 ) -> (Vec<DVec3>, SolveStats) {
-    let mut stats =
-        SolveStats { solver: params.solver, iterations: 0, residual_history: Vec::new(), converged: false };
+    let mut stats = SolveStats { solver: params.solver, iterations: 0, residual_history: Vec::new(), converged: false };
     let mut exitance = emission.to_vec();
     let mut scratch = vec![DVec3::ZERO; exitance.len()];
     let diagonal = diagonal(ff);
