@@ -35,15 +35,16 @@ pub fn gather(columns: &[u32], factors: &[f32], exitance: &[DVec3]) -> DVec3 {
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
-/// The diagonal F_ii of every row (0 when not stored). A flat element's hemicube never sees the
-/// element itself, so this is all zeros for hemicube form factors; the solvers still handle it.
+/// F_ii of row i (0 when not stored). A flat element's hemicube never sees the element itself, so
+/// this is 0 for hemicube form factors; the Gauss-Seidel sweep still handles it.
+pub fn row_diagonal(ff: &FormFactors, i: usize) -> f32 {
+    let (c, v) = ff.row(i);
+    c.iter().zip(v).filter(|(&j, _)| j as usize == i).map(|(_, &f)| f).sum()
+}
+
+/// The diagonal F_ii of every row (see `row_diagonal`), serially.
 pub fn diagonal(ff: &FormFactors) -> Vec<f32> {
-    (0..ff.len())
-        .map(|i| {
-            let (c, v) = ff.row(i);
-            c.iter().zip(v).filter(|(&j, _)| j as usize == i).map(|(_, &f)| f).sum()
-        })
-        .collect()
+    (0..ff.len()).map(|i| row_diagonal(ff, i)).collect()
 }
 
 /// What one sweep changed: `max_abs_change` = max_i,c |B_ic^new − B_ic^old| and `max_abs_exitance`
@@ -360,7 +361,11 @@ fn gathering(
     let mut stats = SolveStats { solver: params.solver, iterations: 0, residual_history: Vec::new(), converged: false };
     let mut exitance = emission.to_vec();
     let mut scratch = vec![DVec3::ZERO; exitance.len()];
-    let diagonal = diagonal(ff);
+    // Only Gauss-Seidel needs F_ii; finding it reads every column index, so split it over rows.
+    let diagonal: Vec<f32> = match params.solver {
+        SolverKind::GaussSeidel => (0..ff.len()).into_par_iter().map(|i| row_diagonal(ff, i)).collect(),
+        _ => Vec::new(),
+    };
     while stats.iterations < params.max_iterations {
         let change = match params.solver {
             SolverKind::Jacobi => {
