@@ -522,3 +522,20 @@ fn missing_file_is_an_io_error() {
     let err = Solution::load(Path::new("/nonexistent/radray.solution"), 0).unwrap_err();
     assert!(matches!(err, SolutionFileError::Io { .. }) && err.to_string().contains("/nonexistent/radray.solution"));
 }
+
+#[test]
+fn scene_without_emitter_solves_to_black() {
+    let (mesh, system) = cornell_mesh();
+    let mut dark = mesh.clone();
+    dark.elements.emission.iter_mut().for_each(|e| *e = Vec3::ZERO);
+    let black = Solution::black(&dark);
+    assert_eq!(black.mesh_fingerprint, fingerprint(&dark));
+    assert!(black.stats.converged);
+    for solver in ALL_SOLVERS {
+        let computed = Solution::compute(&dark, &system.ff, &params(solver, 1e-6), &mut |_, _| {});
+        assert!(computed.stats.converged, "{solver:?}");
+        assert_eq!(computed.element_exitance, black.element_exitance);
+        assert_eq!(computed.vertex_exitance, black.vertex_exitance);
+        assert_eq!(computed.element_direct_exitance, black.element_direct_exitance);
+    }
+}
