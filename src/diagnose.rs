@@ -200,7 +200,8 @@ pub fn diagnose_surfaces(surfaces: &[Surface], options: &DiagnoseOptions) -> Geo
         })
         .collect();
     let mut candidate_pairs = 0usize;
-    let mut t_found: Vec<(usize, u32, (u32, u32), usize, DVec3)> = Vec::new();
+    // (edge surface, welded vertex id, welded edge, vertex surface, vertex)
+    let mut t_found: Vec<RawTJunction> = Vec::new();
     let mut coplanar: Vec<(usize, usize, bool, f64, DVec3)> = Vec::new();
     let mut crossings: Vec<(usize, usize, f64, DVec3)> = Vec::new();
     for_each_candidate_pair(&boxes, |a, b| {
@@ -223,7 +224,7 @@ pub fn diagnose_surfaces(surfaces: &[Surface], options: &DiagnoseOptions) -> Geo
     });
 
     // One T-junction per (vertex position, geometric edge): an edge shared by two faces counts once.
-    t_found.sort_by(|x, y| (x.1, x.2, x.0, x.3).cmp(&(y.1, y.2, y.0, y.3)));
+    t_found.sort_by_key(|x| (x.1, x.2, x.0, x.3));
     t_found.dedup_by(|x, y| x.1 == y.1 && x.2 == y.2);
     t_found.sort_by_key(|x| (x.0, x.3, x.1));
     let t_junctions = Findings {
@@ -605,6 +606,9 @@ fn weld_vertices(polys: &[Option<Poly>], tolerance: f64) -> Vec<Vec<u32>> {
         .collect()
 }
 
+type RawTJunction = (usize, u32, (u32, u32), usize, DVec3);
+type EdgeUse = (usize, bool, usize);
+
 fn edge_key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
 }
@@ -614,7 +618,8 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
 /// edge-connected patch is 2-coloured by orientation from its lowest-index face; the smaller colour
 /// class (on a tie, the one without that face) is reported as flipped.
 fn flipped_faces(surfaces: &[Surface], polys: &[Option<Poly>], ids: &[Vec<u32>], max_examples: usize) -> FlippedFaces {
-    let mut edges: HashMap<(u32, u32), Vec<(usize, bool, usize)>> = HashMap::new();
+    // Welded edge → (face, traversed from the lower id to the higher?, the face's edge index).
+    let mut edges: HashMap<(u32, u32), Vec<EdgeUse>> = HashMap::new();
     for (s, p) in polys.iter().enumerate() {
         let Some(p) = p else { continue };
         if surfaces[s].two_sided {
