@@ -319,12 +319,15 @@ proptest! {
 // ---------------------------------------------------------------------------------------------------
 // (c) Random and mutated OBJ files, loaded through a scene's [[mesh]].
 
-const MTL: &str = "newmtl white\nKd 0.5 0.5 0.5\n\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n";
+/// The materials of the random OBJs (`white`, `lamp`) and of the shipped ones.
+const MTL: &str = "newmtl white\nKd 0.5 0.5 0.5\n\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n\nnewmtl red\nKd 0.6 0.1 0.1\n\n\
+newmtl green\nKd 0.1 0.5 0.1\n\nnewmtl light\nKe 17 12 4\n\nnewmtl gray_emitter\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
 
 fn coordinate() -> impl Strategy<Value = String> {
     prop_oneof![
-        6 => (-4i32..=4).prop_map(|x| x.to_string()),
-        4 => (-10.0f64..10.0).prop_map(|x| format!("{x:.3}")),
+        20 => (-4i32..=4).prop_map(|x| x.to_string()),
+        12 => (-10.0f64..10.0).prop_map(|x| format!("{x:.3}")),
+        // Rarely, so that most files stay loadable and reach the mesher.
         1 => prop::sample::select(&["1e30", "-1e30", "1e-30", "3.5e38", "nan", "inf", "x", "1,5", "", "0x10"][..])
             .prop_map(str::to_string),
     ]
@@ -333,8 +336,8 @@ fn coordinate() -> impl Strategy<Value = String> {
 fn face_index(vertex_count: usize) -> impl Strategy<Value = String> {
     let n = vertex_count.max(1) as i64;
     prop_oneof![
-        8 => (1..=n).prop_map(|i| i.to_string()),
-        2 => (-n..=-1).prop_map(|i| i.to_string()),
+        24 => (1..=n).prop_map(|i| i.to_string()),
+        6 => (-n..=-1).prop_map(|i| i.to_string()),
         1 => (1..=n).prop_map(|i| format!("{i}//1")),
         1 => (1..=n).prop_map(|i| format!("{i}/1/1")),
         1 => prop::sample::select(&["0", "-999", "999", "99999999999999999999", "a", "1/", "/1", "//", "1/-5"][..])
@@ -345,7 +348,8 @@ fn face_index(vertex_count: usize) -> impl Strategy<Value = String> {
 fn obj_line(vertex_count: usize) -> impl Strategy<Value = String> {
     prop_oneof![
         6 => (coordinate(), coordinate(), coordinate()).prop_map(|(x, y, z)| format!("v {x} {y} {z}")),
-        8 => prop::collection::vec(face_index(vertex_count), 1..8).prop_map(|i| format!("f {}", i.join(" "))),
+        8 => prop::collection::vec(face_index(vertex_count), 3..8).prop_map(|i| format!("f {}", i.join(" "))),
+        1 => prop::collection::vec(face_index(vertex_count), 0..3).prop_map(|i| format!("f {}", i.join(" "))),
         1 => (coordinate(), coordinate(), coordinate()).prop_map(|(x, y, z)| format!("vn {x} {y} {z}")),
         1 => (coordinate(), coordinate()).prop_map(|(u, v)| format!("vt {u} {v}")),
         2 => prop::sample::select(&["usemtl white", "usemtl lamp", "usemtl missing", "usemtl"][..])
@@ -357,9 +361,10 @@ fn obj_line(vertex_count: usize) -> impl Strategy<Value = String> {
     ]
 }
 
-/// A cube's eight corners and six quad faces (one of them a lamp), then random lines.
+/// A texture coordinate, a normal, a cube's eight corners and six quad faces (one of them a lamp), then random lines.
 fn obj_text() -> impl Strategy<Value = String> {
-    let base = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
+    let base =
+        "mtllib m.mtl\nvt 0 0\nvn 0 0 1\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
     (prop::collection::vec(obj_line(8), 0..30), any::<bool>(), any::<prop::sample::Index>()).prop_map(
         move |(lines, with_cube, at)| {
             let mut text = String::from(base);
@@ -367,9 +372,10 @@ fn obj_text() -> impl Strategy<Value = String> {
                 text.push_str("usemtl white\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\n");
                 text.push_str("usemtl lamp\nf 2 3 7 6\n");
             }
-            // Random lines go in the middle of the file as well as at its end.
+            // Random lines go at the end, or (a quarter of the time) anywhere — where faces may name
+            // vertices that are not defined yet.
             let mut all: Vec<String> = text.lines().map(str::to_string).collect();
-            let k = at.index(all.len() + 1);
+            let k = at.index(4 * (all.len() + 1)).min(all.len());
             for (n, l) in lines.into_iter().enumerate() {
                 all.insert((k + n).min(all.len()), l);
             }
@@ -378,13 +384,14 @@ fn obj_text() -> impl Strategy<Value = String> {
     )
 }
 
-/// Shipped OBJ text with random line edits (as in (b), but on the OBJ).
+/// Shipped OBJ text with random line edits (as in (b), but on the OBJ). New faces use the first four
+/// vertices, which exist from the first face on.
 fn mutated_shipped_obj() -> impl Strategy<Value = String> {
     let texts: Vec<String> = ["cornell_original", "cornell_empty", "furnace"]
         .iter()
         .map(|d| std::fs::read_to_string(scenes_dir().join(d).join("scene.obj")).expect("shipped OBJ is readable"))
         .collect();
-    (0..texts.len(), prop::collection::vec((any::<prop::sample::Index>(), obj_line(24), 0..3u8), 1..8)).prop_map(
+    (0..texts.len(), prop::collection::vec((any::<prop::sample::Index>(), obj_line(4), 0..3u8), 1..8)).prop_map(
         move |(which, edits)| {
             let mut lines: Vec<String> = texts[which].lines().map(str::to_string).collect();
             for (at, line, kind) in edits {
@@ -401,7 +408,8 @@ fn mutated_shipped_obj() -> impl Strategy<Value = String> {
                 }
             }
             // The shipped files name `scene.mtl`; the fuzz directory holds `m.mtl`.
-            lines.join("\n").replace("mtllib scene.mtl", "mtllib m.mtl")
+            // One texture coordinate and one normal, for the `i/1/1` and `i//1` face vertices.
+            "vt 0 0\nvn 0 0 1\n".to_string() + &lines.join("\n").replace("mtllib scene.mtl", "mtllib m.mtl")
         },
     )
 }
