@@ -6,6 +6,7 @@
 
 pub mod accel;
 pub mod cli;
+pub mod diagnose;
 pub mod film;
 pub mod mesh;
 pub mod output;
