@@ -2,6 +2,7 @@
 //! factors; pass two is a Whitted ray tracer whose diffuse term is the radiosity solution.
 
 pub mod accel;
+pub mod compare;
 pub mod film;
 pub mod mesh;
 pub mod output;
