@@ -160,13 +160,8 @@ pub fn metrics(test: &Image, reference: &Image, mask: Option<&[bool]>) -> Result
 }
 
 /// Control points of a magma-like ramp (matplotlib's magma at t = 0, ¼, ½, ¾, 1), sRGB-encoded.
-const MAGMA_SRGB: [[f32; 3]; 5] = [
-    [0.001, 0.000, 0.014],
-    [0.316, 0.071, 0.485],
-    [0.716, 0.215, 0.475],
-    [0.987, 0.535, 0.382],
-    [0.987, 0.991, 0.750],
-];
+const MAGMA_SRGB: [[f32; 3]; 5] =
+    [[0.001, 0.000, 0.014], [0.316, 0.071, 0.485], [0.716, 0.215, 0.475], [0.987, 0.535, 0.382], [0.987, 0.991, 0.750]];
 
 /// The magma-like colour of t ∈ [0, 1] as LINEAR radiance (so that writing it as an sRGB PNG shows the
 /// ramp): piecewise-linear interpolation of [`MAGMA_SRGB`], then the sRGB EOTF.

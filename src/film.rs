@@ -112,7 +112,8 @@ pub fn gaussian_filter(x: f32, radius_px: f32) -> f32 {
     let r = radius_px as f64;
     let sigma = r / 3.0;
     let g = |x: f64| (-x * x / (2.0 * sigma * sigma)).exp();
-    let norm = sigma * (2.0 * std::f64::consts::PI).sqrt() * erf(r / (sigma * std::f64::consts::SQRT_2)) - 2.0 * r * g(r);
+    let norm =
+        sigma * (2.0 * std::f64::consts::PI).sqrt() * erf(r / (sigma * std::f64::consts::SQRT_2)) - 2.0 * r * g(r);
     ((g(x as f64) - g(r)) / norm) as f32
 }
 
@@ -155,7 +156,8 @@ fn erf(x: f64) -> f64 {
     let sign = x.signum();
     let x = x.abs();
     let t = 1.0 / (1.0 + 0.327_591_1 * x);
-    let poly = t * (0.254_829_592 + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let poly =
+        t * (0.254_829_592 + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
     sign * (1.0 - poly * (-x * x).exp())
 }
 
@@ -189,7 +191,9 @@ impl FilterSampler {
             let n = FILTER_TABLE_BINS;
             let bin_px = 2.0 * radius_px as f64 / n as f64;
             let magnitude: Vec<f64> = (0..n)
-                .map(|k| filter_1d(kind, (-radius_px as f64 + (k as f64 + 0.5) * bin_px) as f32, radius_px).abs() as f64)
+                .map(|k| {
+                    filter_1d(kind, (-radius_px as f64 + (k as f64 + 0.5) * bin_px) as f32, radius_px).abs() as f64
+                })
                 .collect();
             let total: f64 = magnitude.iter().sum();
             let mut acc = 0.0;
@@ -257,7 +261,7 @@ impl FilterSampler {
 pub fn stratum_grid(count: u32) -> (u32, u32) {
     let count = count.max(1);
     let mut columns = (count as f64).sqrt() as u32;
-    while columns > 1 && count % columns != 0 {
+    while columns > 1 && !count.is_multiple_of(columns) {
         columns -= 1;
     }
     let columns = columns.max(1);
@@ -284,7 +288,7 @@ pub fn multi_jittered(columns: u32, rows: u32, rng: &mut Pcg32, out: &mut Vec<[f
     let cells = &mut out[start..];
     for i in 0..nc {
         for j in (1..nr).rev() {
-            let k = (rng.next_u32() as u64 * (j as u64 + 1) >> 32) as usize;
+            let k = ((rng.next_u32() as u64 * (j as u64 + 1)) >> 32) as usize;
             let (a, b) = (j * nc + i, k * nc + i);
             let tmp = cells[a][0];
             cells[a][0] = cells[b][0];
@@ -293,7 +297,7 @@ pub fn multi_jittered(columns: u32, rows: u32, rng: &mut Pcg32, out: &mut Vec<[f
     }
     for j in 0..nr {
         for i in (1..nc).rev() {
-            let k = (rng.next_u32() as u64 * (i as u64 + 1) >> 32) as usize;
+            let k = ((rng.next_u32() as u64 * (i as u64 + 1)) >> 32) as usize;
             let (a, b) = (j * nc + i, j * nc + k);
             let tmp = cells[a][1];
             cells[a][1] = cells[b][1];

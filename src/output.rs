@@ -289,9 +289,7 @@ mod tests {
         let samples: [u16; 2] = [0, 65535];
         let bytes: Vec<u8> = samples.iter().flat_map(|v| v.to_ne_bytes()).collect();
         let mut png = Vec::new();
-        image::codecs::png::PngEncoder::new(&mut png)
-            .write_image(&bytes, 2, 1, image::ExtendedColorType::L16)
-            .unwrap();
+        image::codecs::png::PngEncoder::new(&mut png).write_image(&bytes, 2, 1, image::ExtendedColorType::L16).unwrap();
         std::fs::write(&path, png).unwrap();
         let image = read_image(&path).unwrap();
         assert_eq!(image.pixels, vec![Vec3::ZERO, Vec3::ONE]);

@@ -11,7 +11,13 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 const ALL_FILTERS: [FilterKind; 4] = [FilterKind::Box, FilterKind::Tent, FilterKind::Gaussian, FilterKind::Mitchell];
 
-fn settings(width_px: u32, height_px: u32, samples_per_pixel: u32, filter: FilterKind, radius_px: f32) -> ImageSettings {
+fn settings(
+    width_px: u32,
+    height_px: u32,
+    samples_per_pixel: u32,
+    filter: FilterKind,
+    radius_px: f32,
+) -> ImageSettings {
     ImageSettings {
         width_px,
         height_px,
@@ -479,10 +485,7 @@ fn non_finite_test_values_count_as_zero_and_the_mask_selects_pixels() {
     let only_second = compare::metrics(&test, &reference, Some(&[false, true])).unwrap();
     assert_eq!(only_second.errors.rmse, 0.0);
     assert_eq!(only_second.scale, 1.0);
-    assert_eq!(
-        compare::metrics(&test, &reference, Some(&[false, false])),
-        Err(CompareError::NothingSelected)
-    );
+    assert_eq!(compare::metrics(&test, &reference, Some(&[false, false])), Err(CompareError::NothingSelected));
     assert!(matches!(compare::metrics(&test, &reference, Some(&[true])), Err(CompareError::MaskSize { .. })));
 }
 
