@@ -106,15 +106,36 @@ pub fn tent_filter(x: f32, radius_px: f32) -> f32 {
 /// g(x) = exp(−x²/(2σ²)), f(x) = (g(x) − g(r)) / N for |x| ≤ r, with
 /// N = σ√(2π)·erf(r/(σ√2)) − 2r·g(r) so that ∫ f = 1.
 pub fn gaussian_filter(x: f32, radius_px: f32) -> f32 {
-    if x.abs() > radius_px {
-        return 0.0;
+    GaussianTerms::new(radius_px).eval(x)
+}
+
+/// The constants of [`gaussian_filter`] for one radius, so that hot loops evaluate one `exp` per call.
+#[derive(Clone, Copy, Debug)]
+struct GaussianTerms {
+    radius_px: f32,
+    inv_two_sigma_sq: f64,
+    g_at_radius: f64,
+    inv_norm: f64,
+}
+
+impl GaussianTerms {
+    fn new(radius_px: f32) -> Self {
+        let r = radius_px as f64;
+        let sigma = r / 3.0;
+        let inv_two_sigma_sq = 1.0 / (2.0 * sigma * sigma);
+        let g_at_radius = (-r * r * inv_two_sigma_sq).exp();
+        let norm = sigma * (2.0 * std::f64::consts::PI).sqrt() * erf(r / (sigma * std::f64::consts::SQRT_2))
+            - 2.0 * r * g_at_radius;
+        GaussianTerms { radius_px, inv_two_sigma_sq, g_at_radius, inv_norm: 1.0 / norm }
     }
-    let r = radius_px as f64;
-    let sigma = r / 3.0;
-    let g = |x: f64| (-x * x / (2.0 * sigma * sigma)).exp();
-    let norm =
-        sigma * (2.0 * std::f64::consts::PI).sqrt() * erf(r / (sigma * std::f64::consts::SQRT_2)) - 2.0 * r * g(r);
-    ((g(x as f64) - g(r)) / norm) as f32
+
+    fn eval(&self, x: f32) -> f32 {
+        if x.abs() > self.radius_px {
+            return 0.0;
+        }
+        let x = x as f64;
+        (((-x * x * self.inv_two_sigma_sq).exp() - self.g_at_radius) * self.inv_norm) as f32
+    }
 }
 
 /// Mitchell–Netravali cubic (Mitchell & Netravali 1988, "Reconstruction filters in computer graphics")
@@ -182,11 +203,18 @@ pub struct FilterSampler {
     cdf: Vec<f32>,
     /// pdf of each bin (1/px): |f(centre)| / (Σ|f|·Δ).
     pdf: Vec<f32>,
+    gaussian: GaussianTerms,
 }
 
 impl FilterSampler {
     pub fn new(kind: FilterKind, radius_px: f32) -> Self {
-        let mut sampler = FilterSampler { kind, radius_px, cdf: Vec::new(), pdf: Vec::new() };
+        let mut sampler = FilterSampler {
+            kind,
+            radius_px,
+            cdf: Vec::new(),
+            pdf: Vec::new(),
+            gaussian: GaussianTerms::new(radius_px),
+        };
         if matches!(kind, FilterKind::Gaussian | FilterKind::Mitchell) {
             let n = FILTER_TABLE_BINS;
             let bin_px = 2.0 * radius_px as f64 / n as f64;
@@ -237,7 +265,8 @@ impl FilterSampler {
                 let bin_px = 2.0 * r / n as f32;
                 let x = (-r + (k as f32 + t) * bin_px).clamp(-r, r);
                 let pdf = self.pdf[k];
-                let weight = if pdf > 0.0 { filter_1d(self.kind, x, r) / pdf } else { 0.0 };
+                let f = if self.kind == FilterKind::Gaussian { self.gaussian.eval(x) } else { mitchell_filter(x, r) };
+                let weight = if pdf > 0.0 { f / pdf } else { 0.0 };
                 (x, weight)
             }
         }
