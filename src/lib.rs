@@ -5,11 +5,15 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod batch;
 pub mod cli;
+pub mod compare;
 pub mod diagnose;
+pub mod info;
 pub mod film;
 pub mod mesh;
 pub mod output;
+pub mod pipeline;
 pub mod progress;
 pub mod radiosity;
 pub mod rng;
