@@ -514,9 +514,10 @@ fn rasterise_convex(
         let ids = &mut items[row + lo..=row + hi];
         for (k, (z, id)) in depth.iter_mut().zip(ids.iter_mut()).enumerate() {
             let candidate = row_depth + pa * (lo + k) as f32;
-            let closer = candidate > *z;
-            *z = if closer { candidate } else { *z };
-            *id = if closer { item } else { *id };
+            // Branch-free so that it vectorises: max for the depth, a bit mask for the id.
+            let mask = ((candidate > *z) as u32).wrapping_neg();
+            *z = z.max(candidate);
+            *id = (*id & !mask) | (item & mask);
         }
     }
 }
