@@ -67,10 +67,10 @@ fn cornell_box() -> SceneDescription {
     }
 }
 
-/// One hemicube from a floor element near the middle of the room, at the meshing of the real run
-/// (max edge 20 mm, ≈ 10k elements). Time per iteration = 1 / (hemicubes/s); throughput = pixels/s.
+/// One hemicube from a floor element near the middle of the room, at the meshing of the target run
+/// (max edge 14 mm: 10,096 elements). Time per iteration = 1 / (hemicubes/s); throughput = pixels/s.
 fn one_hemicube(c: &mut Criterion) {
-    let mesh = Mesh::build(&cornell_box(), 20.0);
+    let mesh = Mesh::build(&cornell_box(), 14.0);
     let hierarchy = ElementHierarchy::new(&mesh);
     let e = &mesh.elements;
     let target = Vec3::new(278.0, 0.0, 400.0);
