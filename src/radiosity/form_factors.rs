@@ -1,5 +1,6 @@
 //! The form-factor matrix, stored sparsely: one row per element, f32 values with u32 column indices
 //! (compressed sparse rows). Row i holds F_ij for the elements j that element i's hemicube sees.
+//! `compute` builds it from a mesh, one hemicube per element in parallel; `estimate` predicts its cost.
 
 use glam::Vec3;
 use rayon::prelude::*;

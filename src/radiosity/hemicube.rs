@@ -152,7 +152,7 @@ pub struct ItemBuffer {
     /// Items that passed culling in the current hemicube, in the order they were added.
     touched: Vec<u32>,
     frame: HemicubeFrame,
-    /// Polygons rasterised and pixels written (depth test passed) since creation: for benchmarks.
+    /// Polygons that passed culling (and were scan-converted) since creation: for benchmarks.
     pub polygons_rasterised: u64,
 }
 
