@@ -1,1 +1,590 @@
-//! The hemicube (Cohen and Greenberg 1985): delta form factors and the item-buffer rasteriser.
+//! The hemicube (Cohen and Greenberg 1985): delta form factors and the item-buffer rasteriser that
+//! turns "which polygon is seen through each hemicube pixel" into point-to-polygon form factors.
+//!
+//! Layout: a unit hemicube over the eye with its top face z = 1 covering [-1,1]² (N×N pixels) and four
+//! side faces (±x, ±y) N pixels wide and N/2 high (height z ∈ [0,1]). All five faces live in one
+//! buffer: the top face first, then the four side faces, row-major, row 0 of a side face at the base.
+
+use glam::Vec3;
+
+/// Fixed-point subpixel precision of the rasteriser: vertices snap to 1/256 pixel.
+const SUBPIXEL_BITS: u32 = 8;
+const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
+/// Guard band: polygons are clipped to |u|, |v| ≤ GUARD·w in face coordinates (the face is |u| ≤ w),
+/// so projected coordinates stay small and the integer edge functions exact.
+const GUARD: f32 = 2.0;
+/// Most input corners rasterised as one polygon; larger convex polygons are fanned into triangles.
+const MAX_INPUT_CORNERS: usize = 8;
+/// Most vertices after clipping a polygon of `MAX_INPUT_CORNERS` against the 5 clip planes.
+const MAX_CLIPPED: usize = MAX_INPUT_CORNERS + 6;
+
+/// Precomputed delta form factors of one hemicube resolution.
+#[derive(Clone, Debug)]
+pub struct Hemicube {
+    resolution_px: usize,
+    /// ΔF of every pixel of the five faces, in buffer order (top face, then +x, −x, +y, −y).
+    delta: Vec<f32>,
+}
+
+impl Hemicube {
+    /// Delta form factors for a top face of `resolution_px` × `resolution_px` pixels (odd values are
+    /// rounded up to even so that side faces are exactly N/2 high; at least 2).
+    ///
+    /// With ΔA = (2/N)² and pixel centres (x, y) on the top face z = 1, or (u, z) on a side face:
+    /// top ΔF = ΔA / (π (x² + y² + 1)²), side ΔF = z·ΔA / (π (u² + z² + 1)²)
+    /// (Cohen and Greenberg 1985, eqs. 7 and 8). They sum to 1 up to the midpoint rule's O(1/N²) error.
+    pub fn new(resolution_px: u32) -> Self {
+        let n = (resolution_px.max(2) as usize).next_multiple_of(2);
+        let half = n / 2;
+        let da = (2.0 / n as f64).powi(2);
+        let centre = |i: usize| -1.0 + (i as f64 + 0.5) * 2.0 / n as f64;
+        let mut delta = Vec::with_capacity(3 * n * n);
+        for j in 0..n {
+            let y = centre(j);
+            for i in 0..n {
+                let x = centre(i);
+                delta.push((da / (std::f64::consts::PI * (x * x + y * y + 1.0).powi(2))) as f32);
+            }
+        }
+        for _face in 0..4 {
+            for j in 0..half {
+                let z = (j as f64 + 0.5) * 2.0 / n as f64;
+                for i in 0..n {
+                    let u = centre(i);
+                    delta.push((z * da / (std::f64::consts::PI * (u * u + z * z + 1.0).powi(2))) as f32);
+                }
+            }
+        }
+        Hemicube { resolution_px: n, delta }
+    }
+
+    /// N: pixels across the top face.
+    pub fn resolution_px(&self) -> u32 {
+        self.resolution_px as u32
+    }
+
+    /// Pixels of all five faces (3N²).
+    pub fn pixel_count(&self) -> usize {
+        self.delta.len()
+    }
+
+    /// ΔF of every pixel in buffer order (top face N×N, then four side faces N/2 rows × N).
+    pub fn delta_form_factors(&self) -> &[f32] {
+        &self.delta
+    }
+
+    /// Σ ΔF over the hemicube (≈ 1), in double precision.
+    pub fn delta_sum(&self) -> f64 {
+        self.delta.iter().map(|&d| d as f64).sum()
+    }
+
+    /// (offset in the buffer, width_px, height_px) of face `f` (0 top, 1 +x, 2 −x, 3 +y, 4 −y).
+    fn face_rect(&self, f: usize) -> (usize, usize, usize) {
+        let n = self.resolution_px;
+        if f == 0 {
+            (0, n, n)
+        } else {
+            (n * n + (f - 1) * n * (n / 2), n, n / 2)
+        }
+    }
+}
+
+/// The orthonormal frame of one hemicube: `normal` is the top face's axis, `tangent` and `bitangent`
+/// the local x and y axes (side faces ±x, ±y).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HemicubeFrame {
+    pub eye: Vec3,
+    pub tangent: Vec3,
+    pub bitangent: Vec3,
+    pub normal: Vec3,
+}
+
+impl HemicubeFrame {
+    /// The frame at `eye` around unit `normal`, rotated by `rotation_rad` about it. With no rotation the
+    /// tangent is the world x axis projected onto the tangent plane (the world y axis when |n_x| ≥ 0.9),
+    /// and bitangent = normal × tangent.
+    pub fn new(eye: Vec3, normal: Vec3, rotation_rad: f32) -> Self {
+        let normal = normal.normalize();
+        let axis = if normal.x.abs() >= 0.9 { Vec3::Y } else { Vec3::X };
+        let t0 = (axis - axis.dot(normal) * normal).normalize();
+        let b0 = normal.cross(t0);
+        let (s, c) = rotation_rad.sin_cos();
+        let tangent = (c * t0 + s * b0).normalize();
+        let bitangent = normal.cross(tangent);
+        HemicubeFrame { eye, tangent, bitangent, normal }
+    }
+
+    /// World point → local (x, y, z) relative to the eye.
+    #[inline]
+    fn local(&self, p: Vec3) -> Vec3 {
+        let d = p - self.eye;
+        Vec3::new(d.dot(self.tangent), d.dot(self.bitangent), d.dot(self.normal))
+    }
+
+    /// World direction → local.
+    #[inline]
+    fn local_dir(&self, d: Vec3) -> Vec3 {
+        Vec3::new(d.dot(self.tangent), d.dot(self.bitangent), d.dot(self.normal))
+    }
+}
+
+/// Local (x, y, z) → face coordinates (u, v, w): w along the face's axis, the projection is (u/w, v/w).
+#[inline]
+fn to_face(f: usize, p: Vec3) -> [f32; 3] {
+    match f {
+        0 => [p.x, p.y, p.z],
+        1 => [p.y, p.z, p.x],
+        2 => [p.y, p.z, -p.x],
+        3 => [p.x, p.z, p.y],
+        _ => [p.x, p.z, -p.y],
+    }
+}
+
+/// Per-thread working memory of the rasteriser: the item buffer (item id and inverse depth 1/w per
+/// pixel of the five faces) and a dense accumulator of form factors per item.
+#[derive(Clone, Debug)]
+pub struct ItemBuffer {
+    /// 1/w of the nearest surface seen through each pixel (w: distance along the face axis); 0 = empty.
+    inverse_depth: Vec<f32>,
+    item: Vec<u32>,
+    /// Σ ΔF per item for the current hemicube (zero between hemicubes).
+    accumulator: Vec<f64>,
+    /// Items that passed culling in the current hemicube, in the order they were added.
+    touched: Vec<u32>,
+    frame: HemicubeFrame,
+    /// Polygons that passed culling (and were scan-converted) since creation: for benchmarks.
+    pub polygons_rasterised: u64,
+}
+
+impl ItemBuffer {
+    pub fn new(hc: &Hemicube) -> Self {
+        ItemBuffer {
+            inverse_depth: vec![0.0; hc.pixel_count()],
+            item: vec![0; hc.pixel_count()],
+            accumulator: Vec::new(),
+            touched: Vec::new(),
+            frame: HemicubeFrame::new(Vec3::ZERO, Vec3::Z, 0.0),
+            polygons_rasterised: 0,
+        }
+    }
+
+    /// Starts a hemicube: clears the depth buffer (the item ids need no clearing).
+    pub fn begin(&mut self, hc: &Hemicube, frame: HemicubeFrame) {
+        if self.inverse_depth.len() != hc.pixel_count() {
+            *self = ItemBuffer::new(hc);
+        }
+        self.inverse_depth.fill(0.0);
+        self.touched.clear();
+        self.frame = frame;
+    }
+
+    /// The current frame.
+    pub fn frame(&self) -> &HemicubeFrame {
+        &self.frame
+    }
+
+    /// True when a box (world min/max corners) lies entirely behind the hemicube's base plane or
+    /// outside every face's view frustum: none of its contents can be seen. Conservative.
+    pub fn box_is_invisible(&self, min: Vec3, max: Vec3) -> bool {
+        let mut corners = [Vec3::ZERO; 8];
+        for (k, c) in corners.iter_mut().enumerate() {
+            let p = Vec3::new(
+                if k & 1 == 0 { min.x } else { max.x },
+                if k & 2 == 0 { min.y } else { max.y },
+                if k & 4 == 0 { min.z } else { max.z },
+            );
+            *c = self.frame.local(p);
+        }
+        corners.iter().all(|p| p.z <= 0.0) || face_mask(&corners) == 0
+    }
+
+    /// Adds convex polygon `item` (world corners, counter-clockwise about its front `normal`; `centre`
+    /// any point of its plane) to the current hemicube. Culled when it lies behind the base plane or is
+    /// back-facing, i.e. unless (centre − eye)·normal < 0 (one-sided surfaces). Otherwise it is clipped
+    /// against each face's near plane and guard band (Sutherland–Hodgman) and scan-converted into the
+    /// item buffer with depth test, pixel-centre sampling and a top-left fill rule.
+    pub fn add_polygon(&mut self, hc: &Hemicube, item: u32, corners: &[Vec3], normal: Vec3, centre: Vec3) {
+        if corners.len() < 3 {
+            return;
+        }
+        let frame = self.frame;
+        let plane_offset = (centre - frame.eye).dot(normal);
+        if plane_offset.is_nan() || plane_offset >= 0.0 {
+            return; // back-facing, edge-on or NaN
+        }
+        if corners.len() > MAX_INPUT_CORNERS {
+            // A convex polygon is the fan of its triangles; the fill rule keeps them from overlapping.
+            for k in 1..corners.len() - 1 {
+                self.add_polygon(hc, item, &[corners[0], corners[k], corners[k + 1]], normal, centre);
+            }
+            return;
+        }
+        let mut local = [Vec3::ZERO; MAX_INPUT_CORNERS];
+        let mut above = false;
+        for (l, &c) in local.iter_mut().zip(corners) {
+            *l = frame.local(c);
+            above |= l.z > 0.0;
+        }
+        if !above {
+            return; // entirely behind the base plane
+        }
+        let local = &local[..corners.len()];
+        let plane_normal = frame.local_dir(normal);
+        if item as usize >= self.accumulator.len() {
+            self.accumulator.resize(item as usize + 1, 0.0);
+        }
+        if self.touched.last() != Some(&item) {
+            self.touched.push(item);
+        }
+        self.polygons_rasterised += 1;
+        let mask = face_mask(local);
+        for f in 0..5 {
+            if mask & (1 << f) != 0 {
+                self.rasterise_face(hc, f, item, local, plane_normal, plane_offset);
+            }
+        }
+    }
+
+    fn rasterise_face(&mut self, hc: &Hemicube, f: usize, item: u32, local: &[Vec3], m: Vec3, d: f32) {
+        let mut poly = [[0f32; 3]; MAX_CLIPPED];
+        let mut count = local.len();
+        let mut needs_clip = false;
+        let mut scale = 0f32;
+        for (q, &p) in poly.iter_mut().zip(local) {
+            *q = to_face(f, p);
+            let [u, v, w] = *q;
+            needs_clip |= w.is_nan() || w <= 0.0 || u.abs() > GUARD * w || v.abs() > GUARD * w;
+            scale = scale.max(u.abs()).max(v.abs()).max(w.abs());
+        }
+        if needs_clip {
+            let near = 1e-6 * scale;
+            let planes: [[f32; 4]; 5] = [
+                [0.0, 0.0, 1.0, -near],
+                [-1.0, 0.0, GUARD, 0.0],
+                [1.0, 0.0, GUARD, 0.0],
+                [0.0, -1.0, GUARD, 0.0],
+                [0.0, 1.0, GUARD, 0.0],
+            ];
+            for plane in &planes {
+                count = clip_polygon(&mut poly, count, plane);
+                if count < 3 {
+                    return;
+                }
+            }
+        }
+        let (offset, width, height) = hc.face_rect(f);
+        let half = (hc.resolution_px / 2) as f32;
+        let top = f == 0;
+        let mut screen = [[0f32; 2]; MAX_CLIPPED];
+        for (s, &[u, v, w]) in screen.iter_mut().zip(&poly[..count]) {
+            let inv = 1.0 / w;
+            *s = [(u * inv + 1.0) * half, if top { (v * inv + 1.0) * half } else { v * inv * half }];
+        }
+        // The polygon's plane m·(u, v, w) = d in face coordinates gives 1/w = (m_u u + m_v v + m_w)/d,
+        // affine in the pixel coordinates (u = px/half − 1, v = py/half − 1 on top, py/half on sides).
+        let [mu, mv, mw] = to_face(f, m);
+        let plane = [mu / (half * d), mv / (half * d), (mw - mu - if top { mv } else { 0.0 }) / d];
+        let end = offset + width * height;
+        rasterise_convex(
+            &screen[..count],
+            width,
+            height,
+            plane,
+            item,
+            &mut self.inverse_depth[offset..end],
+            &mut self.item[offset..end],
+        );
+    }
+
+    /// Ends the hemicube: F_j = Σ ΔF over the pixels item j won. Calls `emit(j, F_j)` for every item
+    /// added since `begin` that won at least one pixel, in the order they were first added, and resets
+    /// the accumulator.
+    pub fn finish(&mut self, hc: &Hemicube, mut emit: impl FnMut(u32, f64)) {
+        let acc = &mut self.accumulator;
+        // Neighbouring pixels mostly show the same item: sum runs in a register, flush on change.
+        let (mut run_item, mut run_sum) = (u32::MAX, 0.0f64);
+        for ((&z, &id), &df) in self.inverse_depth.iter().zip(&self.item).zip(&hc.delta) {
+            if z > 0.0 {
+                if id != run_item {
+                    if run_item != u32::MAX {
+                        acc[run_item as usize] += run_sum;
+                    }
+                    run_item = id;
+                    run_sum = 0.0;
+                }
+                run_sum += df as f64;
+            }
+        }
+        if run_item != u32::MAX {
+            acc[run_item as usize] += run_sum;
+        }
+        for &j in &self.touched {
+            let f = std::mem::take(&mut acc[j as usize]);
+            if f > 0.0 {
+                emit(j, f);
+            }
+        }
+    }
+}
+
+/// Bit f set when face f (0 top, 1 +x, 2 −x, 3 +y, 4 −y) may see part of the points' convex hull: for
+/// each face, the hull is rejected when every point lies outside one of its frustum planes (|u| ≤ w,
+/// v ≤ w, and v ≥ −w on top or v ≥ 0 on a side) or behind it (w ≤ 0).
+fn face_mask(local: &[Vec3]) -> u8 {
+    // out[f] collects, per face, "all points outside plane k" as bits k = 0..5.
+    let mut out = [0x1fu8; 5];
+    for &Vec3 { x, y, z } in local {
+        let below = z < 0.0;
+        let bits = |u: f32, v: f32, w: f32, v_low: bool| -> u8 {
+            (u < -w) as u8 | ((u > w) as u8) << 1 | ((v > w) as u8) << 2 | (v_low as u8) << 3 | ((w <= 0.0) as u8) << 4
+        };
+        out[0] &= bits(x, y, z, y < -z);
+        out[1] &= bits(y, z, x, below);
+        out[2] &= bits(y, z, -x, below);
+        out[3] &= bits(x, z, y, below);
+        out[4] &= bits(x, z, -y, below);
+    }
+    let mut mask = 0;
+    for (f, &o) in out.iter().enumerate() {
+        if o == 0 {
+            mask |= 1 << f;
+        }
+    }
+    mask
+}
+
+/// One edge of a polygon being scan-converted: q = ⌊K/e⌋ and r = K − e·q for the current row
+/// (for a horizontal edge, sign 0 and q = K itself).
+#[derive(Clone, Copy, Debug, Default)]
+struct Edge {
+    sign: i64,
+    q: i64,
+    r: i64,
+    e: i64,
+    step_q: i64,
+    step_r: i64,
+}
+
+/// Pixel coordinate → fixed point (1/256 pixel), rounding half away from zero (no libm call).
+#[inline]
+fn snap(x: f32) -> i64 {
+    let scaled = x * SUBPIXEL as f32;
+    (scaled + if scaled >= 0.0 { 0.5 } else { -0.5 }) as i64
+}
+
+/// Sutherland–Hodgman: clips polygon `poly[..count]` (face coordinates) to the half-space
+/// a·u + b·v + c·w + e ≥ 0 in place; returns the new vertex count.
+fn clip_polygon(poly: &mut [[f32; 3]; MAX_CLIPPED], count: usize, plane: &[f32; 4]) -> usize {
+    let dist = |p: &[f32; 3]| plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3];
+    let input = *poly;
+    let mut out = 0;
+    for k in 0..count {
+        let a = input[k];
+        let b = input[(k + 1) % count];
+        let (da, db) = (dist(&a), dist(&b));
+        if da >= 0.0 {
+            poly[out] = a;
+            out += 1;
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            let t = da / (da - db);
+            poly[out] = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])];
+            out += 1;
+        }
+        if out >= MAX_CLIPPED {
+            break; // cannot happen for convex input; keeps indices in bounds regardless
+        }
+    }
+    out
+}
+
+/// Scan-converts a convex polygon (pixel coordinates, either winding) into one face of the item buffer.
+///
+/// Pixel (i, j) is sampled at its centre (i + ½, j + ½). Vertices snap to 1/256 pixel and the edge
+/// functions E(p) = (b − a) × (p − a) are exact in i64; a sample exactly on an edge belongs to the
+/// polygon only for "top-left" edges (dy > 0, or dy = 0 and dx < 0, for a counter-clockwise polygon),
+/// so polygons sharing an edge never both cover a sample and leave no gap. Each row's span comes from
+/// intersecting the edges' half-lines, so the inner loop is a plain depth test: the pixel takes `item`
+/// when 1/w = plane·(i + ½, j + ½, 1) exceeds the stored value.
+fn rasterise_convex(
+    screen: &[[f32; 2]],
+    width: usize,
+    height: usize,
+    plane: [f32; 3],
+    item: u32,
+    inverse_depth: &mut [f32],
+    items: &mut [u32],
+) {
+    let mut xs = [0i64; MAX_CLIPPED];
+    let mut ys = [0i64; MAX_CLIPPED];
+    let mut m = 0;
+    for s in screen {
+        let (x, y) = (snap(s[0]), snap(s[1]));
+        if m == 0 || x != xs[m - 1] || y != ys[m - 1] {
+            xs[m] = x;
+            ys[m] = y;
+            m += 1;
+        }
+    }
+    while m > 1 && xs[m - 1] == xs[0] && ys[m - 1] == ys[0] {
+        m -= 1;
+    }
+    if m < 3 {
+        return;
+    }
+    let mut area2 = 0i64;
+    for k in 0..m {
+        let k1 = if k + 1 == m { 0 } else { k + 1 };
+        area2 += xs[k] * ys[k1] - xs[k1] * ys[k];
+    }
+    if area2 == 0 {
+        return;
+    }
+    if area2 < 0 {
+        xs[..m].reverse();
+        ys[..m].reverse();
+    }
+    let (xmin, xmax) = (xs[..m].iter().min().copied(), xs[..m].iter().max().copied());
+    let (ymin, ymax) = (ys[..m].iter().min().copied(), ys[..m].iter().max().copied());
+    let (Some(xmin), Some(xmax), Some(ymin), Some(ymax)) = (xmin, xmax, ymin, ymax) else { return };
+    let half = SUBPIXEL / 2;
+    // Pixels whose centre i·S + S/2 lies in [min, max].
+    let i_lo = (xmin - half + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
+    let i_hi = (xmax - half).div_euclid(SUBPIXEL).min(width as i64 - 1);
+    let j_lo = (ymin - half + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
+    let j_hi = (ymax - half).div_euclid(SUBPIXEL).min(height as i64 - 1);
+    if i_lo > i_hi || j_lo > j_hi {
+        return;
+    }
+    // Edge k: E(px, py) = dx (py − ay) − dy (px − ax) ≥ bias, bias 0 on top-left edges, else 1.
+    // At pixel centre px = i·S + S/2 on row py: E − bias = K(py) − D·i with D = dy·S and
+    // K(py) = dx·py + (dy·ax − dx·ay − dy·S/2 − bias). With e = |D| and q = ⌊K/e⌋ the row's span is
+    // i ≤ q (D > 0) or i ≥ −q (D < 0); K grows by dx·S per row, so q and the remainder K − e·q are
+    // stepped exactly in integers (a DDA), one division per edge and polygon.
+    let mut edges = [Edge::default(); MAX_CLIPPED];
+    let py0 = j_lo * SUBPIXEL + half;
+    for (k, edge) in edges.iter_mut().enumerate().take(m) {
+        let k1 = if k + 1 == m { 0 } else { k + 1 };
+        let (dx, dy) = (xs[k1] - xs[k], ys[k1] - ys[k]);
+        let bias = if dy > 0 || (dy == 0 && dx < 0) { 0 } else { 1 };
+        let k_row = dx * py0 + dy * xs[k] - dx * ys[k] - dy * half - bias;
+        let step = dx * SUBPIXEL;
+        let e = (dy * SUBPIXEL).abs();
+        *edge = if e == 0 {
+            Edge { sign: 0, q: k_row, r: 0, e: 1, step_q: step, step_r: 0 }
+        } else {
+            Edge {
+                sign: dy.signum(),
+                q: k_row.div_euclid(e),
+                r: k_row.rem_euclid(e),
+                e,
+                step_q: step.div_euclid(e),
+                step_r: step.rem_euclid(e),
+            }
+        };
+    }
+    let edges = &mut edges[..m];
+    let [pa, pb, pc] = plane;
+    for j in j_lo..=j_hi {
+        let (mut lo, mut hi) = (i_lo, i_hi);
+        for edge in edges.iter_mut() {
+            match edge.sign {
+                1 => hi = hi.min(edge.q),
+                -1 => lo = lo.max(-edge.q),
+                _ => {
+                    if edge.q < 0 {
+                        hi = -1; // a horizontal edge with the row outside
+                    }
+                }
+            }
+            edge.q += edge.step_q;
+            edge.r += edge.step_r;
+            if edge.r >= edge.e {
+                edge.r -= edge.e;
+                edge.q += 1;
+            }
+        }
+        if lo > hi {
+            continue;
+        }
+        let (lo, hi) = (lo as usize, hi as usize);
+        let row = j as usize * width;
+        let row_depth = pb * (j as f32 + 0.5) + pc + pa * 0.5;
+        let depth = &mut inverse_depth[row + lo..=row + hi];
+        let ids = &mut items[row + lo..=row + hi];
+        for (k, (z, id)) in depth.iter_mut().zip(ids.iter_mut()).enumerate() {
+            let candidate = row_depth + pa * (lo + k) as f32;
+            // Branch-free so that it vectorises: max for the depth, a bit mask for the id.
+            let mask = ((candidate > *z) as u32).wrapping_neg();
+            *z = z.max(candidate);
+            *id = (*id & !mask) | (item & mask);
+        }
+    }
+}
+
+/// Form factors from a point to each polygon of a scene by one hemicube (Nusselt analog, Cohen and
+/// Greenberg 1985): F_j = Σ ΔF over the hemicube pixels where polygon j is the nearest surface.
+///
+/// `eye` is the differential area's position, `normal` its unit normal; the hemicube is rotated by
+/// `rotation_rad` about the normal (see `HemicubeFrame::new`). Each polygon is convex, planar and
+/// counter-clockwise about its front; it is seen only from the front and occludes the others. Returns
+/// F_j per polygon (their sum ≈ the visible fraction of the hemisphere).
+pub fn point_form_factors(
+    hc: &Hemicube,
+    eye: Vec3,
+    normal: Vec3,
+    rotation_rad: f32,
+    polygons: &[&[Vec3]],
+    buffers: &mut ItemBuffer,
+) -> Vec<f64> {
+    buffers.begin(hc, HemicubeFrame::new(eye, normal, rotation_rad));
+    for (j, poly) in polygons.iter().enumerate() {
+        if poly.len() < 3 {
+            continue;
+        }
+        let (poly_normal, centre) = newell_plane(poly);
+        buffers.add_polygon(hc, j as u32, poly, poly_normal, centre);
+    }
+    let mut out = vec![0.0; polygons.len()];
+    buffers.finish(hc, |j, f| out[j as usize] = f);
+    out
+}
+
+/// Unit normal (Newell's method: n ∝ Σ v_k × v_{k+1}) and vertex centroid of a polygon.
+pub fn newell_plane(poly: &[Vec3]) -> (Vec3, Vec3) {
+    let mut n = Vec3::ZERO;
+    let mut c = Vec3::ZERO;
+    for (k, &v) in poly.iter().enumerate() {
+        n += v.cross(poly[(k + 1) % poly.len()]);
+        c += v;
+    }
+    (n.normalize_or_zero(), c / poly.len() as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fill_rule_covers_each_pixel_of_a_split_square_once() {
+        // Two triangles sharing a diagonal, rasterised with different ids: every covered pixel is won by
+        // exactly one of them and the union equals the square's pixels (no gaps, no double cover).
+        let (w, h) = (16usize, 16usize);
+        let mut depth = vec![0f32; w * h];
+        let mut ids = vec![u32::MAX; w * h];
+        let sq = [[2.0f32, 2.0], [10.0, 2.0], [10.0, 10.0], [2.0, 10.0]];
+        let mut count = vec![0u32; w * h];
+        for (id, tri) in [[sq[0], sq[1], sq[2]], [sq[0], sq[2], sq[3]]].iter().enumerate() {
+            depth.fill(0.0);
+            ids.fill(u32::MAX);
+            rasterise_convex(tri, w, h, [0.0, 0.0, 1.0], id as u32, &mut depth, &mut ids);
+            for p in 0..w * h {
+                if ids[p] != u32::MAX {
+                    count[p] += 1;
+                }
+            }
+        }
+        assert!(count.iter().all(|&c| c <= 1));
+        assert_eq!(count.iter().sum::<u32>(), 64);
+    }
+}
