@@ -27,10 +27,11 @@ const SMALL: &[&str] = &["--width", "24", "--height", "24", "--spp", "2", "--qua
 
 #[test]
 fn render_writes_png_and_exr() {
+    let cornell_box = scene("cornell_box.toml");
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("c.png");
     let exr = dir.path().join("c.exr");
-    let mut args = vec!["render", &scene("cornell_box.toml")[..], "-o", png.to_str().unwrap(), "-o", exr.to_str().unwrap()];
+    let mut args = vec!["render", &cornell_box[..], "-o", png.to_str().unwrap(), "-o", exr.to_str().unwrap()];
     let small = SMALL.to_vec();
     args.extend(small);
     let out = radray(&args);
@@ -46,9 +47,10 @@ fn render_writes_png_and_exr() {
 
 #[test]
 fn mode_both_writes_final_and_radiosity_names() {
+    let cornell_box = scene("cornell_box.toml");
     let dir = tempfile::tempdir().unwrap();
     let out_path = dir.path().join("pic.exr");
-    let mut args = vec!["render", &scene("cornell_box.toml")[..], "-o", out_path.to_str().unwrap(), "--mode", "both"];
+    let mut args = vec!["render", &cornell_box[..], "-o", out_path.to_str().unwrap(), "--mode", "both"];
     args.extend(SMALL);
     let out = radray(&args);
     assert!(out.status.success(), "{}", stderr(&out));
@@ -76,7 +78,8 @@ fn unusable_outputs_are_refused_before_any_work() {
     let out = radray(&["render", &scene("cornell_box.toml"), "-o", dir.path().join("x.jpg").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains(".png or .exr"), "{}", stderr(&out));
-    let out = radray(&["render", &scene("cornell_box.toml"), "-o", dir.path().join("no/such/dir/x.png").to_str().unwrap()]);
+    let out =
+        radray(&["render", &scene("cornell_box.toml"), "-o", dir.path().join("no/such/dir/x.png").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("does not exist"), "{}", stderr(&out));
 }
@@ -100,16 +103,17 @@ fn help_shows_examples() {
 
 #[test]
 fn saved_solution_renders_the_same_image() {
+    let cornell_box = scene("cornell_box.toml");
     let dir = tempfile::tempdir().unwrap();
     let sol = dir.path().join("c.radsol");
     let out = radray(&["solve", &scene("cornell_box.toml"), "-o", sol.to_str().unwrap(), "--quality", "preview"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let direct = dir.path().join("direct.exr");
     let reused = dir.path().join("reused.exr");
-    let mut a = vec!["render", &scene("cornell_box.toml")[..], "-o", direct.to_str().unwrap()];
+    let mut a = vec!["render", &cornell_box[..], "-o", direct.to_str().unwrap()];
     a.extend(SMALL);
     assert!(radray(&a).status.success());
-    let mut b = vec!["render", &scene("cornell_box.toml")[..], "-o", reused.to_str().unwrap(), "--solution", sol.to_str().unwrap()];
+    let mut b = vec!["render", &cornell_box[..], "-o", reused.to_str().unwrap(), "--solution", sol.to_str().unwrap()];
     b.extend(SMALL);
     let out = radray(&b);
     assert!(out.status.success(), "{}", stderr(&out));
@@ -118,12 +122,13 @@ fn saved_solution_renders_the_same_image() {
 
 #[test]
 fn stale_or_foreign_solution_is_refused() {
+    let cornell_box = scene("cornell_box.toml");
     let dir = tempfile::tempdir().unwrap();
     let sol = dir.path().join("c.radsol");
     let out = radray(&["solve", &scene("cornell_empty.toml"), "-o", sol.to_str().unwrap(), "--quality", "preview"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let png = dir.path().join("x.png");
-    let mut a = vec!["render", &scene("cornell_box.toml")[..], "-o", png.to_str().unwrap(), "--solution", sol.to_str().unwrap()];
+    let mut a = vec!["render", &cornell_box[..], "-o", png.to_str().unwrap(), "--solution", sol.to_str().unwrap()];
     a.extend(SMALL);
     let out = radray(&a);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
@@ -138,10 +143,11 @@ fn stale_or_foreign_solution_is_refused() {
 
 #[test]
 fn stats_file_records_the_run() {
+    let cornell_box = scene("cornell_box.toml");
     let dir = tempfile::tempdir().unwrap();
     let stats = dir.path().join("s.json");
     let png = dir.path().join("x.png");
-    let mut a = vec!["render", &scene("cornell_box.toml")[..], "-o", png.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
+    let mut a = vec!["render", &cornell_box[..], "-o", png.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
     a.extend(SMALL);
     let out = radray(&a);
     assert!(out.status.success(), "{}", stderr(&out));
@@ -160,7 +166,8 @@ fn compare_reports_metrics_and_writes_difference_images() {
     let diff = dir.path().join("d.png");
     let sbs = dir.path().join("s.png");
     let r = reference.to_str().unwrap();
-    let out = radray(&["compare", r, r, "--json", "--diff", diff.to_str().unwrap(), "--side-by-side", sbs.to_str().unwrap()]);
+    let out =
+        radray(&["compare", r, r, "--json", "--diff", diff.to_str().unwrap(), "--side-by-side", sbs.to_str().unwrap()]);
     assert!(out.status.success(), "{}", stderr(&out));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["rmse"].as_f64().unwrap(), 0.0);
@@ -223,7 +230,9 @@ output = "d.png"
     assert_eq!(jobs[2]["reused_solution"], false);
     assert_eq!(jobs[3]["status"], "failed");
     assert!(jobs[3]["error"].as_str().unwrap().contains("does_not_exist.toml"));
-    assert!(dir.path().join("a.png").is_file() && dir.path().join("b.png").is_file() && dir.path().join("c.png").is_file());
+    assert!(
+        dir.path().join("a.png").is_file() && dir.path().join("b.png").is_file() && dir.path().join("c.png").is_file()
+    );
 
     // Shards 0/2 and 1/2 split the jobs between them.
     let m0 = dir.path().join("m0.json");
@@ -254,7 +263,8 @@ fn every_shipped_scene_renders_as_shipped_at_a_small_size() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["cornell_box", "cornell_empty", "cornell_specular", "furnace", "primitives"] {
         let png = dir.path().join(format!("{name}.png"));
-        let mut a = vec!["render", &scene(&format!("{name}.toml"))[..], "-o", png.to_str().unwrap()];
+        let path = scene(&format!("{name}.toml"));
+        let mut a = vec!["render", &path[..], "-o", png.to_str().unwrap()];
         a.extend(SMALL);
         let out = radray(&a);
         assert!(out.status.success(), "{name}: {}", stderr(&out));

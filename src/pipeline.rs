@@ -1,0 +1,227 @@
+//! The one-way flow of a run: scene description → mesh → form factors → radiosity solution →
+//! camera rays → film. Each step takes what the previous one made and reports what it measured.
+
+use crate::accel::Accel;
+use crate::film::{self, Image};
+use crate::mesh::{self, Mesh};
+use crate::progress::Progress;
+use crate::radiosity::{form_factors, FormFactors, Solution};
+use crate::scene::{RadiosityParams, SceneDescription};
+use crate::trace::camera::PinholeCamera;
+use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
+use std::time::Instant;
+
+/// Why a run cannot go on (before anything is allocated or written).
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    #[error("{scene}: meshing at max_element_edge = {edge} would make {elements} elements, more than radray handles ({limit}); use a larger max_element_edge or a coarser --quality")]
+    TooManyElements { scene: String, edge: f32, elements: u64, limit: u64 },
+    #[error("{scene}: the form factors of {elements} elements at hemicube resolution {resolution} would need about {needed_gib:.1} GiB, but about {available_gib:.1} GiB is available; use a larger max_element_edge (memory grows with the square of the element count) or a lower hemicube_resolution")]
+    OutOfMemory { scene: String, elements: usize, resolution: u32, needed_gib: f64, available_gib: f64 },
+}
+
+/// Most elements a mesh may have: beyond this even the per-element arrays and one hemicube pass
+/// per element are out of reach of a workstation.
+pub const MAX_ELEMENTS: u64 = 2_000_000;
+
+/// What a run measured, written by `--stats` and into batch manifests.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct RunStats {
+    pub elements: usize,
+    pub hemicube_resolution_px: u32,
+    pub form_factor_seconds: f64,
+    pub form_factor_nonzeros: usize,
+    pub form_factor_bytes: usize,
+    pub hemicubes_per_second: f64,
+    pub solver: Option<String>,
+    pub sweeps: u32,
+    pub final_residual: f64,
+    pub solve_seconds: f64,
+    pub render_seconds: f64,
+    pub primary_rays: u64,
+    pub secondary_rays: u64,
+    pub shadow_rays: u64,
+    pub rays_per_second: f64,
+    pub samples: u64,
+    pub adaptive_extra_samples: u64,
+    pub peak_memory_bytes: u64,
+}
+
+/// Meshes the scene after checking that the element count is sane.
+pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh, PipelineError> {
+    let edge = scene.radiosity.max_element_edge;
+    let count = mesh::count_elements(scene, edge);
+    if count > MAX_ELEMENTS {
+        return Err(PipelineError::TooManyElements {
+            scene: scene.path.display().to_string(),
+            edge,
+            elements: count,
+            limit: MAX_ELEMENTS,
+        });
+    }
+    let stage = progress.stage("meshing", scene.surfaces.len() as u64, "surfaces");
+    let mesh = Mesh::build(scene, edge);
+    stage.finish(&format!(
+        "{} surfaces → {} elements, {} triangles",
+        scene.surfaces.len(),
+        mesh.elements.len(),
+        mesh.triangles.len()
+    ));
+    Ok(mesh)
+}
+
+/// Bytes the form-factor matrix may take at most: each stored row holds at most one entry per other
+/// element and at most one per hemicube pixel (3N² pixels), 8 bytes per entry.
+pub fn form_factor_bytes_bound(mesh: &Mesh, params: &RadiosityParams) -> u64 {
+    let n = mesh.elements.len() as u64;
+    let pixels = 3 * (params.hemicube_resolution_px as u64).pow(2);
+    let rows = (0..mesh.elements.len())
+        .filter(|&i| mesh.elements.reflectance[i].max_element() > 0.0 || mesh.elements.emission[i].max_element() > 0.0)
+        .count() as u64;
+    rows * n.min(pixels) * 8
+}
+
+/// Memory the system says is available (Linux `MemAvailable`), if known.
+pub fn available_memory_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Peak resident memory of this process so far (Linux `VmHWM`), 0 if unknown.
+pub fn peak_memory_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|t| {
+            t.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        })
+        .map_or(0, |kib| kib * 1024)
+}
+
+/// Refuses a form-factor computation whose matrix could not fit in memory.
+pub fn check_memory(scene: &SceneDescription, mesh: &Mesh) -> Result<(), PipelineError> {
+    let bound = form_factor_bytes_bound(mesh, &scene.radiosity);
+    if let Some(available) = available_memory_bytes() {
+        // The bound is pessimistic by about 2× (an element sees part of the scene), hence the factor.
+        if bound / 2 > available {
+            const GIB: f64 = (1u64 << 30) as f64;
+            return Err(PipelineError::OutOfMemory {
+                scene: scene.path.display().to_string(),
+                elements: mesh.elements.len(),
+                resolution: scene.radiosity.hemicube_resolution_px,
+                needed_gib: bound as f64 / 2.0 / GIB,
+                available_gib: available as f64 / GIB,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Hemicube form factors of every element (rows only where an element reflects or emits).
+pub fn compute_form_factors(
+    mesh: &Mesh,
+    params: &RadiosityParams,
+    progress: &Progress,
+    stats: &mut RunStats,
+) -> FormFactors {
+    let stage = progress.stage("form factors", mesh.elements.len() as u64, "elements");
+    let start = Instant::now();
+    let ff = form_factors::compute(mesh, params, &|| stage.inc(1));
+    let seconds = start.elapsed().as_secs_f64();
+    stats.elements = mesh.elements.len();
+    stats.hemicube_resolution_px = params.hemicube_resolution_px;
+    stats.form_factor_seconds = seconds;
+    stats.form_factor_nonzeros = ff.nnz();
+    stats.form_factor_bytes = ff.memory_bytes();
+    stats.hemicubes_per_second = mesh.elements.len() as f64 / seconds.max(1e-9);
+    stage.finish(&format!(
+        "{} elements at {}², {:.0} hemicubes/s, {} non-zeros ({:.1} MiB)",
+        mesh.elements.len(),
+        params.hemicube_resolution_px,
+        stats.hemicubes_per_second,
+        ff.nnz(),
+        ff.memory_bytes() as f64 / (1 << 20) as f64
+    ));
+    ff
+}
+
+/// Solves B = E + ρ·F·B with the scene's solver.
+pub fn solve(
+    mesh: &Mesh,
+    ff: &FormFactors,
+    params: &RadiosityParams,
+    progress: &Progress,
+    stats: &mut RunStats,
+) -> Solution {
+    let stage = progress.stage("solving", params.max_iterations as u64, "sweeps");
+    let start = Instant::now();
+    let solution = Solution::compute(mesh, ff, params, &mut |iteration, residual| {
+        stage.set_position(iteration as u64);
+        stage.set_message(format!("residual {residual:.2e}"));
+    });
+    stats.solve_seconds = start.elapsed().as_secs_f64();
+    stats.solver = Some(params.solver.name().to_string());
+    stats.sweeps = solution.stats.iterations;
+    stats.final_residual = solution.stats.residual_history.last().copied().unwrap_or(0.0);
+    stage.finish(&format!(
+        "{}: {} iterations, residual {:.2e}{}",
+        params.solver.name(),
+        stats.sweeps,
+        stats.final_residual,
+        if solution.stats.converged { "" } else { " (not converged: iteration cap)" }
+    ));
+    solution
+}
+
+/// Pass two: traces the camera's rays through the scene and develops the film.
+pub fn render(
+    scene: &SceneDescription,
+    mesh: &Mesh,
+    accel: &Accel,
+    solution: &Solution,
+    mode: TraceMode,
+    progress: &Progress,
+    stats: &mut RunStats,
+) -> Result<Image, crate::trace::TraceError> {
+    let image = &scene.image;
+    let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
+    let tracer =
+        Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?.with_shading_normals(&scene.surfaces);
+    let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
+    let stage = progress.stage(
+        if mode == TraceMode::Final { "render final" } else { "render radiosity" },
+        tiles as u64,
+        "tiles",
+    );
+    let start = Instant::now();
+    let (picture, film_stats, counts) = film::render_with(
+        image,
+        RayCounts::default,
+        |counts: &mut RayCounts, x, y, rng| {
+            let ray = camera.ray(x, y);
+            tracer.radiance(ray.origin, ray.dir, mode, rng, counts)
+        },
+        &|| stage.inc(1),
+    );
+    let seconds = start.elapsed().as_secs_f64();
+    let total: RayCounts = counts.into_iter().sum();
+    stats.render_seconds += seconds;
+    stats.primary_rays += total.primary;
+    stats.secondary_rays += total.secondary;
+    stats.shadow_rays += total.shadow;
+    stats.samples += film_stats.samples;
+    stats.adaptive_extra_samples += film_stats.adaptive_extra_samples;
+    let rays = total.primary + total.secondary + total.shadow;
+    stats.rays_per_second =
+        (stats.primary_rays + stats.secondary_rays + stats.shadow_rays) as f64 / stats.render_seconds.max(1e-9);
+    stage.finish(&format!(
+        "{}×{} at {} spp: {} rays ({:.2} M rays/s)",
+        image.width_px,
+        image.height_px,
+        image.samples_per_pixel,
+        rays,
+        rays as f64 / seconds.max(1e-9) / 1e6
+    ));
+    Ok(picture)
+}
