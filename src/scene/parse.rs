@@ -252,6 +252,8 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
     })?;
     let dir = path.parent().unwrap_or(Path::new("."));
 
+    // The camera is checked first: it needs no geometry, and its errors are the cheapest to fix.
+    let explicit_camera = raw.camera.as_ref().map(|c| camera(&loc, c)).transpose()?;
     let mut materials: Vec<Material> = Vec::new();
     let mut material_lines: Vec<std::ops::Range<usize>> = Vec::new();
     for m in &raw.material {
@@ -408,8 +410,8 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
         .iter()
         .flat_map(|s| s.vertices.iter())
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    let camera = match &raw.camera {
-        Some(c) => camera(&loc, c)?,
+    let camera = match explicit_camera {
+        Some(c) => c,
         None => {
             let centre = (bounds.0 + bounds.1) * 0.5;
             let extent = (bounds.1 - bounds.0).max_element().max(1e-3);
