@@ -2,6 +2,7 @@
 //! solved, with the suspicious geometry that usually causes light leaks.
 
 use crate::mesh;
+use crate::radiosity::form_factors;
 use crate::scene::SceneDescription;
 
 /// One emitting material's share of the scene.
@@ -24,10 +25,9 @@ pub struct InfoReport {
     pub hemicube_resolution_px: u32,
     pub solver: String,
     pub emitters: Vec<EmitterInfo>,
-    /// Upper bound of the form-factor matrix's size (8 bytes per entry, rows of reflecting or
-    /// emitting elements, at most one entry per other element or per hemicube pixel).
+    /// Predicted size of the form-factor matrix (`radiosity::form_factors::estimate`).
     pub estimated_form_factor_bytes: u64,
-    /// Rough hemicube time on this machine's cores (see `estimate_form_factor_seconds`).
+    /// Predicted hemicube time on this machine's cores (`radiosity::form_factors::estimate`).
     pub estimated_form_factor_seconds: f64,
     pub warnings: Vec<String>,
     pub geometry: crate::diagnose::GeometryReport,
@@ -63,19 +63,15 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
             e.power[c] += std::f64::consts::PI * m.emitted_radiance[c] as f64 * a;
         }
     }
-    let reflecting = |m: &crate::scene::Material| m.diffuse_reflectance.max_element() > 0.0 || m.is_emitter();
-    let row_fraction = {
-        let total: u64 = elements.max(1);
-        let with_rows: u64 = scene
-            .surfaces
-            .iter()
-            .filter(|s| reflecting(&scene.materials[s.material as usize]))
-            .map(|s| mesh::count_surface_elements(s, p.max_element_edge))
-            .sum();
-        with_rows as f64 / total as f64
+    // Meshing is cheap (milliseconds for 10⁵ elements), so the estimate uses the real mesh unless the
+    // element count is beyond what radray would mesh at all.
+    let (bytes, seconds) = if elements <= crate::pipeline::MAX_ELEMENTS {
+        let mesh = mesh::Mesh::build(scene, p.max_element_edge);
+        let e = form_factors::estimate(&mesh, p);
+        (e.matrix_bytes as u64, e.seconds)
+    } else {
+        (u64::MAX, f64::INFINITY)
     };
-    let rows = (elements as f64 * row_fraction) as u64;
-    let pixels = 3 * (p.hemicube_resolution_px as u64).pow(2);
     InfoReport {
         scene: scene.path.display().to_string(),
         surfaces: scene.surfaces.len(),
@@ -85,22 +81,11 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
         hemicube_resolution_px: p.hemicube_resolution_px,
         solver: p.solver.name().to_string(),
         emitters,
-        estimated_form_factor_bytes: rows * elements.min(pixels) * 8,
-        estimated_form_factor_seconds: estimate_form_factor_seconds(rows, elements, p.hemicube_resolution_px),
+        estimated_form_factor_bytes: bytes,
+        estimated_form_factor_seconds: seconds,
         warnings: scene.warnings.clone(),
         geometry: crate::diagnose::diagnose(scene),
     }
-}
-
-/// Hemicube time model: each of `rows` hemicubes clears and scans its 3N² pixels and projects the
-/// `elements` polygons, spread over the machine's cores. The constants were measured on the
-/// development machine (see the closing notes / docs/performance.md).
-pub fn estimate_form_factor_seconds(rows: u64, elements: u64, resolution_px: u32) -> f64 {
-    const SECONDS_PER_PIXEL: f64 = 2.0e-9;
-    const SECONDS_PER_POLYGON: f64 = 6.0e-8;
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-    let per_hemicube = 3.0 * (resolution_px as f64).powi(2) * SECONDS_PER_PIXEL + elements as f64 * SECONDS_PER_POLYGON;
-    rows as f64 * per_hemicube / cores
 }
 
 impl std::fmt::Display for InfoReport {
@@ -122,13 +107,13 @@ impl std::fmt::Display for InfoReport {
         }
         writeln!(
             f,
-            "form factors    at most {:.1} MiB, about {:.1} s",
+            "form factors    about {:.1} MiB, about {:.1} s",
             self.estimated_form_factor_bytes as f64 / MIB,
             self.estimated_form_factor_seconds
         )?;
         for w in &self.warnings {
             writeln!(f, "warning         {w}")?;
         }
-        write!(f, "{}", self.geometry)
+        writeln!(f, "{}", self.geometry)
     }
 }
