@@ -68,7 +68,7 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
     let (bytes, seconds) = if elements <= crate::pipeline::MAX_ELEMENTS {
         let mesh = mesh::Mesh::build(scene, p.max_element_edge);
         let e = form_factors::estimate(&mesh, p);
-        (e.matrix_bytes as u64, e.seconds)
+        (e.matrix_bytes, e.seconds)
     } else {
         (u64::MAX, f64::INFINITY)
     };
