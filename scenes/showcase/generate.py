@@ -14,12 +14,14 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 W, H, D = 4.0, 3.0, 5.0  # room: x in [0, W], y in [0, H], z in [0, D]; the camera looks along +z
 
 verts = []
+normals = []  # per vertex: a unit normal for smooth (curved) surfaces, or None for flat ones
 faces = []  # (material, [vertex indices, 1-based])
 objects = []  # (name, first face, last face)
 
 
-def v(p):
+def v(p, n=None):
     verts.append(p)
+    normals.append(n)
     return len(verts)
 
 
@@ -35,20 +37,23 @@ def quad(a, b, c, d, mat):
     faces.append((mat, [v(a), v(b), v(c), v(d)]))
 
 
-def box(lo, hi, mat):
+def box(lo, hi, mat, bottom=True):
+    """An axis-aligned box facing outwards; `bottom=False` leaves out the face resting on the floor."""
     (x0, y0, z0), (x1, y1, z1) = lo, hi
     p = lambda i, j, k: (x1 if i else x0, y1 if j else y0, z1 if k else z0)
     quad(p(0, 0, 0), p(0, 0, 1), p(0, 1, 1), p(0, 1, 0), mat)  # x-
     quad(p(1, 0, 0), p(1, 1, 0), p(1, 1, 1), p(1, 0, 1), mat)  # x+
-    quad(p(0, 0, 0), p(1, 0, 0), p(1, 0, 1), p(0, 0, 1), mat)  # y- (bottom)
+    if bottom:
+        quad(p(0, 0, 0), p(1, 0, 0), p(1, 0, 1), p(0, 0, 1), mat)  # y- (bottom)
     quad(p(0, 1, 0), p(0, 1, 1), p(1, 1, 1), p(1, 1, 0), mat)  # y+
     quad(p(0, 0, 0), p(0, 1, 0), p(1, 1, 0), p(1, 0, 0), mat)  # z-
     quad(p(0, 0, 1), p(1, 0, 1), p(1, 1, 1), p(0, 1, 1), mat)  # z+
 
 
 def grid_surface(f, nu, nv, mat):
-    """A closed parametric surface f(u, v), u and v in [0, 1) wrapping, as triangles facing outwards."""
-    idx = [[v(f(i / nu, j / nv)) for j in range(nv)] for i in range(nu)]
+    """A closed parametric surface f(u, v) -> (point, normal), u and v in [0, 1) wrapping, as triangles
+    facing outwards."""
+    idx = [[v(*f(i / nu, j / nv)) for j in range(nv)] for i in range(nu)]
     for i in range(nu):
         for j in range(nv):
             a, b = idx[i][j], idx[(i + 1) % nu][j]
@@ -64,8 +69,9 @@ def sphere(centre, r, nu, nv, mat):
         th = math.pi * j / nv
         for i in range(nu):
             ph = 2 * math.pi * i / nu
-            idx[i, j] = v((cx + r * math.sin(th) * math.cos(ph), cy + r * math.cos(th), cz - r * math.sin(th) * math.sin(ph)))
-    top, bottom = v((cx, cy + r, cz)), v((cx, cy - r, cz))
+            n = (math.sin(th) * math.cos(ph), math.cos(th), -math.sin(th) * math.sin(ph))
+            idx[i, j] = v((cx + r * n[0], cy + r * n[1], cz + r * n[2]), n)
+    top, bottom = v((cx, cy + r, cz), (0.0, 1.0, 0.0)), v((cx, cy - r, cz), (0.0, -1.0, 0.0))
     for i in range(nu):
         k = (i + 1) % nu
         faces.append((mat, [top, idx[i, 1], idx[k, 1]]))
@@ -100,9 +106,10 @@ def torus_knot(centre, scale, p, q, tube, nu, nv, mat):
         n = norm(cross(t, (0.0, 1.0, 0.0)))
         b = cross(n, t)
         a = 2 * math.pi * w
-        off = tuple(tube * (math.cos(a) * n[k] + math.sin(a) * b[k]) for k in range(3))
-        # y is "up" in the scene: lay the knot flat and lift it to centre
-        return (cx + c[0] + off[0], cy + c[1] * 0.35 + off[1], cz + c[2] + off[2])
+        radial = tuple(math.cos(a) * n[k] + math.sin(a) * b[k] for k in range(3))
+        # y is "up" in the scene: flatten the knot's height and lift it to `centre`
+        p = (cx + c[0] + tube * radial[0], cy + c[1] * 0.6 + tube * radial[1], cz + c[2] + tube * radial[2])
+        return p, radial
 
     grid_surface(f, nu, nv, mat)
 
@@ -131,24 +138,24 @@ quad((1.3, 0.6, z), (1.3, 2.2, z), (2.7, 2.2, z), (2.7, 0.6, z), "mirror")
 end()
 
 begin("pillars")
-box((0.45, 0.0, 3.6), (0.85, 2.2, 4.0), "white")
-box((3.15, 0.0, 3.6), (3.55, 1.4, 4.0), "white")
+box((0.45, 0.0, 3.6), (0.85, 2.2, 4.0), "white", bottom=False)
+box((3.15, 0.0, 3.6), (3.55, 1.4, 4.0), "white", bottom=False)
 end()
 
 begin("plinth")
-box((1.45, 0.0, 2.55), (2.55, 0.45, 3.65), "white")
+box((1.45, 0.0, 2.55), (2.55, 0.45, 3.65), "white", bottom=False)
 end()
 
 begin("torus_knot")
-torus_knot((2.0, 0.95, 3.1), 0.13, 2, 3, 0.06, 320, 24, "clay")
+torus_knot((2.0, 0.595, 3.1), 0.13, 2, 3, 0.06, 320, 24, "clay")
 end()
 
 begin("glass_sphere")
-sphere((1.0, 0.45, 1.9), 0.45, 96, 48, "glass")
+sphere((0.95, 0.38, 2.2), 0.38, 96, 48, "glass")
 end()
 
 begin("mirror_sphere")
-sphere((3.0, 0.4, 2.2), 0.4, 96, 48, "mirror")
+sphere((2.9, 0.36, 2.3), 0.36, 96, 48, "mirror")
 end()
 
 with open(os.path.join(HERE, "scene.obj"), "w") as out:
@@ -156,6 +163,11 @@ with open(os.path.join(HERE, "scene.obj"), "w") as out:
     out.write("mtllib scene.mtl\n")
     for p in verts:
         out.write("v %.6f %.6f %.6f\n" % p)
+    normal_index = {}
+    for i, n in enumerate(normals):
+        if n is not None:
+            out.write("vn %.6f %.6f %.6f\n" % n)
+            normal_index[i + 1] = len(normal_index) + 1
     for name, first, last in objects:
         out.write("o %s\n" % name)
         current = None
@@ -163,7 +175,10 @@ with open(os.path.join(HERE, "scene.obj"), "w") as out:
             if mat != current:
                 out.write("usemtl %s\n" % mat)
                 current = mat
-            out.write("f %s\n" % " ".join(str(i) for i in idx))
+            if all(i in normal_index for i in idx):
+                out.write("f %s\n" % " ".join("%d//%d" % (i, normal_index[i]) for i in idx))
+            else:
+                out.write("f %s\n" % " ".join(str(i) for i in idx))
 
 MTL = """# radray showcase materials: Kd diffuse reflectance, Ke emitted radiance (W/sr/m^2),
 # Ks mirror reflectance, Ni index of refraction, d < 1 transparent dielectric.
