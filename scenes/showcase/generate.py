@@ -147,7 +147,7 @@ box((1.45, 0.0, 2.55), (2.55, 0.45, 3.65), "white", bottom=False)
 end()
 
 begin("torus_knot")
-torus_knot((2.0, 0.595, 3.1), 0.13, 2, 3, 0.06, 320, 24, "clay")
+torus_knot((2.0, 0.595, 3.1), 0.13, 2, 3, 0.06, 192, 16, "clay")
 end()
 
 begin("glass_sphere")
