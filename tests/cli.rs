@@ -271,3 +271,20 @@ fn every_shipped_scene_renders_as_shipped_at_a_small_size() {
         assert!(png.is_file(), "{name}");
     }
 }
+
+#[test]
+fn thread_count_does_not_change_a_single_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let cornell = scene("cornell_box.toml");
+    let mut outputs = Vec::new();
+    for threads in ["1", "2"] {
+        let exr = dir.path().join(format!("t{threads}.exr"));
+        let mut a =
+            vec!["render", &cornell[..], "-o", exr.to_str().unwrap(), "--threads", threads, "--direct", "pixel"];
+        a.extend(SMALL);
+        let out = radray(&a);
+        assert!(out.status.success(), "{}", stderr(&out));
+        outputs.push(std::fs::read(&exr).unwrap());
+    }
+    assert!(outputs[0] == outputs[1], "1 and 2 threads gave different images");
+}
