@@ -638,9 +638,9 @@ fn rasterise_narrow(
     let Window { start, i_lo, i_hi, j_lo, j_hi, width } = *window;
     let py0 = j_lo * SUBPIXEL + half;
     let rows = j_hi - j_lo;
-    // Per edge: value at (start, j_lo), step per lane (−D) and per row (dx·S).
+    // Per edge: value at (start, j_lo), offset of each lane (−D·l) and step per row (dx·S).
     let mut value = [0i32; MAX_CLIPPED];
-    let mut lane_step = [0i32; MAX_CLIPPED];
+    let mut lane_step = [[0i32; LANES]; MAX_CLIPPED];
     let mut row_step = [0i32; MAX_CLIPPED];
     let limit = i32::MAX as i64 / 2;
     for k in 0..m {
@@ -662,7 +662,9 @@ fn rasterise_narrow(
             return false;
         }
         value[k] = v0 as i32;
-        lane_step[k] = -d as i32;
+        for (l, s) in lane_step[k].iter_mut().enumerate() {
+            *s = (-d * l as i64) as i32;
+        }
         row_step[k] = step as i32;
     }
     let mut lane_ok = [false; LANES];
@@ -681,9 +683,8 @@ fn rasterise_narrow(
         let mut inside = lane_ok;
         for k in 0..m {
             let v = value[k];
-            let s = lane_step[k];
-            for (l, inside) in inside.iter_mut().enumerate() {
-                *inside &= v + s * l as i32 >= 0;
+            for (inside, &s) in inside.iter_mut().zip(&lane_step[k]) {
+                *inside &= v + s >= 0;
             }
             value[k] = v + row_step[k];
         }
