@@ -10,6 +10,8 @@ use glam::Vec3;
 /// Fixed-point subpixel precision of the rasteriser: vertices snap to 1/256 pixel.
 const SUBPIXEL_BITS: u32 = 8;
 const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
+/// Partial sums per item in `ItemBuffer::finish` (divides 3N² for every even N).
+const ACC_LANES: usize = 4;
 /// Guard band: polygons are clipped to |u|, |v| ≤ GUARD·w in face coordinates (the face is |u| ≤ w),
 /// so projected coordinates stay small and the integer edge functions exact.
 const GUARD: f32 = 2.0;
@@ -147,7 +149,8 @@ pub struct ItemBuffer {
     /// 1/w of the nearest surface seen through each pixel (w: distance along the face axis); 0 = empty.
     inverse_depth: Vec<f32>,
     item: Vec<u32>,
-    /// Σ ΔF per item for the current hemicube (zero between hemicubes).
+    /// Σ ΔF per item for the current hemicube as `ACC_LANES` partial sums (item j at
+    /// j·ACC_LANES..), plus one spare item for empty pixels; zero between hemicubes.
     accumulator: Vec<f64>,
     /// Items that passed culling in the current hemicube, in the order they were added.
     touched: Vec<u32>,
@@ -242,8 +245,9 @@ impl ItemBuffer {
         }
         let local = &local[..corners.len()];
         let plane_normal = frame.local_dir(normal);
-        if item as usize >= self.accumulator.len() {
-            self.accumulator.resize(item as usize + 1, 0.0);
+        // Items 0..=item plus the spare slot for empty pixels, ACC_LANES partial sums each.
+        if (item as usize + 2) * ACC_LANES > self.accumulator.len() {
+            self.accumulator.resize((item as usize + 2) * ACC_LANES, 0.0);
         }
         if self.touched.last() != Some(&item) {
             self.touched.push(item);
@@ -354,26 +358,26 @@ impl ItemBuffer {
     /// the accumulator.
     pub fn finish(&mut self, hc: &Hemicube, mut emit: impl FnMut(u32, f64)) {
         self.rasterise_queued(hc);
+        // Branch-free: ACC_LANES interleaved partial sums per item (pixel p adds to lane p mod
+        // ACC_LANES), so that runs of one item do not chain every add through the same memory slot and
+        // run boundaries cost no mispredictions. Empty pixels add to a spare slot past the items.
+        if self.accumulator.is_empty() {
+            self.accumulator.resize(ACC_LANES, 0.0); // nothing added: only the spare slot
+        }
+        let empty = self.accumulator.len() / ACC_LANES - 1;
         let acc = &mut self.accumulator;
-        // Neighbouring pixels mostly show the same item: sum runs in a register, flush on change.
-        let (mut run_item, mut run_sum) = (u32::MAX, 0.0f64);
-        for ((&z, &id), &df) in self.inverse_depth.iter().zip(&self.item).zip(&hc.delta) {
-            if z > 0.0 {
-                if id != run_item {
-                    if run_item != u32::MAX {
-                        acc[run_item as usize] += run_sum;
-                    }
-                    run_item = id;
-                    run_sum = 0.0;
-                }
-                run_sum += df as f64;
+        let pixels = self.inverse_depth.chunks_exact(ACC_LANES).zip(self.item.chunks_exact(ACC_LANES));
+        for ((z, id), df) in pixels.zip(hc.delta.chunks_exact(ACC_LANES)) {
+            for lane in 0..ACC_LANES {
+                let slot = if z[lane] > 0.0 { id[lane] as usize } else { empty };
+                acc[slot * ACC_LANES + lane] += df[lane] as f64;
             }
         }
-        if run_item != u32::MAX {
-            acc[run_item as usize] += run_sum;
-        }
+        acc[empty * ACC_LANES..].fill(0.0);
         for &j in &self.touched {
-            let f = std::mem::take(&mut acc[j as usize]);
+            let lanes = &mut acc[j as usize * ACC_LANES..(j as usize + 1) * ACC_LANES];
+            let f: f64 = lanes.iter().sum();
+            lanes.fill(0.0);
             if f > 0.0 {
                 emit(j, f);
             }
