@@ -10,6 +10,8 @@ use glam::Vec3;
 /// Fixed-point subpixel precision of the rasteriser: vertices snap to 1/256 pixel.
 const SUBPIXEL_BITS: u32 = 8;
 const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
+/// Partial sums per item in `ItemBuffer::finish` (divides 3N² for every even N).
+const ACC_LANES: usize = 4;
 /// Guard band: polygons are clipped to |u|, |v| ≤ GUARD·w in face coordinates (the face is |u| ≤ w),
 /// so projected coordinates stay small and the integer edge functions exact.
 const GUARD: f32 = 2.0;
@@ -147,10 +149,17 @@ pub struct ItemBuffer {
     /// 1/w of the nearest surface seen through each pixel (w: distance along the face axis); 0 = empty.
     inverse_depth: Vec<f32>,
     item: Vec<u32>,
-    /// Σ ΔF per item for the current hemicube (zero between hemicubes).
+    /// Σ ΔF per item for the current hemicube as `ACC_LANES` partial sums (item j at
+    /// j·ACC_LANES..), plus one spare item for empty pixels; zero between hemicubes.
     accumulator: Vec<f64>,
     /// Items that passed culling in the current hemicube, in the order they were added.
     touched: Vec<u32>,
+    /// Polygons queued by `add_polygon` since `begin`, not yet scan-converted.
+    queued: Vec<QueuedPolygon>,
+    /// Their local corners (`QueuedPolygon::first_corner`..+`corner_count`).
+    queued_corners: Vec<Vec3>,
+    /// Per face, the indices into `queued` of the polygons that may cover it, in queueing order.
+    face_queue: [Vec<u32>; 5],
     frame: HemicubeFrame,
     /// Polygons that passed culling (and were scan-converted) since creation: for benchmarks.
     pub polygons_rasterised: u64,
@@ -163,6 +172,9 @@ impl ItemBuffer {
             item: vec![0; hc.pixel_count()],
             accumulator: Vec::new(),
             touched: Vec::new(),
+            queued: Vec::new(),
+            queued_corners: Vec::new(),
+            face_queue: Default::default(),
             frame: HemicubeFrame::new(Vec3::ZERO, Vec3::Z, 0.0),
             polygons_rasterised: 0,
         }
@@ -175,6 +187,7 @@ impl ItemBuffer {
         }
         self.inverse_depth.fill(0.0);
         self.touched.clear();
+        self.clear_queue();
         self.frame = frame;
     }
 
@@ -202,8 +215,10 @@ impl ItemBuffer {
     /// any point of its plane) to the current hemicube. Culled when it lies behind the base plane or is
     /// back-facing, i.e. unless (centre − eye)·normal < 0 (one-sided surfaces). Otherwise it is clipped
     /// against each face's near plane and guard band (Sutherland–Hodgman) and scan-converted into the
-    /// item buffer with depth test, pixel-centre sampling and a top-left fill rule.
+    /// item buffer with depth test, pixel-centre sampling and a top-left fill rule. The scan conversion
+    /// is deferred to `rasterise_queued` (called by `finish`), which draws face by face.
     pub fn add_polygon(&mut self, hc: &Hemicube, item: u32, corners: &[Vec3], normal: Vec3, centre: Vec3) {
+        debug_assert_eq!(self.inverse_depth.len(), hc.pixel_count(), "begin() was called with another hemicube");
         if corners.len() < 3 {
             return;
         }
@@ -230,19 +245,61 @@ impl ItemBuffer {
         }
         let local = &local[..corners.len()];
         let plane_normal = frame.local_dir(normal);
-        if item as usize >= self.accumulator.len() {
-            self.accumulator.resize(item as usize + 1, 0.0);
+        // Items 0..=item plus the spare slot for empty pixels, ACC_LANES partial sums each.
+        if (item as usize + 2) * ACC_LANES > self.accumulator.len() {
+            self.accumulator.resize((item as usize + 2) * ACC_LANES, 0.0);
         }
         if self.touched.last() != Some(&item) {
             self.touched.push(item);
         }
         self.polygons_rasterised += 1;
         let mask = face_mask(local);
-        for f in 0..5 {
+        let index = self.queued.len() as u32;
+        for (f, queue) in self.face_queue.iter_mut().enumerate() {
             if mask & (1 << f) != 0 {
-                self.rasterise_face(hc, f, item, local, plane_normal, plane_offset);
+                queue.push(index);
             }
         }
+        self.queued.push(QueuedPolygon {
+            item,
+            first_corner: self.queued_corners.len() as u32,
+            corner_count: local.len() as u32,
+            plane_normal,
+            plane_offset,
+        });
+        self.queued_corners.extend_from_slice(local);
+    }
+
+    fn clear_queue(&mut self) {
+        self.queued.clear();
+        self.queued_corners.clear();
+        for queue in &mut self.face_queue {
+            queue.clear();
+        }
+    }
+
+    /// Scan-converts the polygons queued since `begin` (or the last call) into the item buffer, face
+    /// by face, so that one face's part of the buffer stays in cache while all its polygons are drawn.
+    /// Within a face the polygons are drawn in the order they were added, so the result is the same
+    /// as drawing each polygon into every face as it arrives. `finish` calls it; call it directly to
+    /// read the item buffer before `finish`.
+    pub fn rasterise_queued(&mut self, hc: &Hemicube) {
+        let queued = std::mem::take(&mut self.queued);
+        let corners = std::mem::take(&mut self.queued_corners);
+        let face_queue = std::mem::take(&mut self.face_queue);
+        for (f, queue) in face_queue.iter().enumerate() {
+            for &index in queue {
+                let q = &queued[index as usize];
+                let first = q.first_corner as usize;
+                let local = &corners[first..first + q.corner_count as usize];
+                self.rasterise_face(hc, f, q.item, local, q.plane_normal, q.plane_offset);
+            }
+        }
+        // Hand the (cleared) allocations back for the next hemicube.
+        self.queued = queued;
+        self.queued_corners = corners;
+        self.face_queue = face_queue;
+        self.clear_queue();
     }
 
     fn rasterise_face(&mut self, hc: &Hemicube, f: usize, item: u32, local: &[Vec3], m: Vec3, d: f32) {
@@ -300,31 +357,43 @@ impl ItemBuffer {
     /// added since `begin` that won at least one pixel, in the order they were first added, and resets
     /// the accumulator.
     pub fn finish(&mut self, hc: &Hemicube, mut emit: impl FnMut(u32, f64)) {
+        self.rasterise_queued(hc);
+        // Branch-free: ACC_LANES interleaved partial sums per item (pixel p adds to lane p mod
+        // ACC_LANES), so that runs of one item do not chain every add through the same memory slot and
+        // run boundaries cost no mispredictions. Empty pixels add to a spare slot past the items.
+        if self.accumulator.is_empty() {
+            self.accumulator.resize(ACC_LANES, 0.0); // nothing added: only the spare slot
+        }
+        let empty = self.accumulator.len() / ACC_LANES - 1;
         let acc = &mut self.accumulator;
-        // Neighbouring pixels mostly show the same item: sum runs in a register, flush on change.
-        let (mut run_item, mut run_sum) = (u32::MAX, 0.0f64);
-        for ((&z, &id), &df) in self.inverse_depth.iter().zip(&self.item).zip(&hc.delta) {
-            if z > 0.0 {
-                if id != run_item {
-                    if run_item != u32::MAX {
-                        acc[run_item as usize] += run_sum;
-                    }
-                    run_item = id;
-                    run_sum = 0.0;
-                }
-                run_sum += df as f64;
+        let pixels = self.inverse_depth.chunks_exact(ACC_LANES).zip(self.item.chunks_exact(ACC_LANES));
+        for ((z, id), df) in pixels.zip(hc.delta.chunks_exact(ACC_LANES)) {
+            for lane in 0..ACC_LANES {
+                let slot = if z[lane] > 0.0 { id[lane] as usize } else { empty };
+                acc[slot * ACC_LANES + lane] += df[lane] as f64;
             }
         }
-        if run_item != u32::MAX {
-            acc[run_item as usize] += run_sum;
-        }
+        acc[empty * ACC_LANES..].fill(0.0);
         for &j in &self.touched {
-            let f = std::mem::take(&mut acc[j as usize]);
+            let lanes = &mut acc[j as usize * ACC_LANES..(j as usize + 1) * ACC_LANES];
+            let f: f64 = lanes.iter().sum();
+            lanes.fill(0.0);
             if f > 0.0 {
                 emit(j, f);
             }
         }
     }
+}
+
+/// A polygon that passed culling, waiting in `ItemBuffer` to be scan-converted: its corners in the
+/// hemicube's local frame and its plane m·p = d there (m the local normal, d = (centre − eye)·normal).
+#[derive(Clone, Copy, Debug)]
+struct QueuedPolygon {
+    item: u32,
+    first_corner: u32,
+    corner_count: u32,
+    plane_normal: Vec3,
+    plane_offset: f32,
 }
 
 /// Bit f set when face f (0 top, 1 +x, 2 −x, 3 +y, 4 −y) may see part of the points' convex hull: for
@@ -461,6 +530,14 @@ fn rasterise_convex(
     // K(py) = dx·py + (dy·ax − dx·ay − dy·S/2 − bias). With e = |D| and q = ⌊K/e⌋ the row's span is
     // i ≤ q (D > 0) or i ≥ −q (D < 0); K grows by dx·S per row, so q and the remainder K − e·q are
     // stepped exactly in integers (a DDA), one division per edge and polygon.
+    if i_hi - i_lo < NARROW_PX as i64 && width >= NARROW_PX {
+        let start = i_lo.min((width - NARROW_PX) as i64);
+        let geometry = Outline { xs: &xs[..m], ys: &ys[..m] };
+        let window = Window { start, i_lo, i_hi, j_lo, j_hi, width };
+        if rasterise_narrow(&geometry, &window, plane, item, inverse_depth, items) {
+            return;
+        }
+    }
     let mut edges = [Edge::default(); MAX_CLIPPED];
     let py0 = j_lo * SUBPIXEL + half;
     for (k, edge) in edges.iter_mut().enumerate().take(m) {
@@ -513,13 +590,121 @@ fn rasterise_convex(
         let depth = &mut inverse_depth[row + lo..=row + hi];
         let ids = &mut items[row + lo..=row + hi];
         for (k, (z, id)) in depth.iter_mut().zip(ids.iter_mut()).enumerate() {
-            let candidate = row_depth + pa * (lo + k) as f32;
+            // i32 → f32 is exact here (i < 2²⁴) and, unlike usize → f32, a single instruction.
+            let candidate = row_depth + pa * (lo as i32 + k as i32) as f32;
             // Branch-free so that it vectorises: max for the depth, a bit mask for the id.
             let mask = ((candidate > *z) as u32).wrapping_neg();
             *z = z.max(candidate);
             *id = (*id & !mask) | (item & mask);
         }
     }
+}
+
+/// Widest polygon (in pixels) drawn by `rasterise_narrow`: one row is one fixed-width block of lanes.
+const NARROW_PX: usize = 8;
+
+/// A convex polygon's snapped vertices (1/256 pixel, counter-clockwise), for `rasterise_narrow`.
+struct Outline<'a> {
+    xs: &'a [i64],
+    ys: &'a [i64],
+}
+
+/// The pixels `rasterise_narrow` may cover: columns i_lo..=i_hi (drawn as the `NARROW_PX` columns from
+/// `start` ≤ i_lo) of rows j_lo..=j_hi of a face `width` pixels wide.
+struct Window {
+    start: i64,
+    i_lo: i64,
+    i_hi: i64,
+    j_lo: i64,
+    j_hi: i64,
+    width: usize,
+}
+
+/// The fast path of `rasterise_convex` for polygons at most `NARROW_PX` pixels wide (most elements
+/// seen from a hemicube cover a few pixels): each row is a fixed block of `NARROW_PX` lanes where every
+/// edge function is evaluated directly, E_k(i) = K_k(py) − D_k·i ≥ 0 (the same exact predicate, with the
+/// same top-left bias, as the span DDA, so the covered pixels are identical), in i32 because the values
+/// are relative to the block. Branch-free per row, so short and ragged spans cost no mispredictions.
+/// Returns false (drawing nothing) when an edge function could leave the i32 range over the block;
+/// the caller then uses the general path.
+fn rasterise_narrow(
+    outline: &Outline,
+    window: &Window,
+    plane: [f32; 3],
+    item: u32,
+    inverse_depth: &mut [f32],
+    items: &mut [u32],
+) -> bool {
+    const LANES: usize = NARROW_PX;
+    let (xs, ys) = (outline.xs, outline.ys);
+    let m = xs.len();
+    let half = SUBPIXEL / 2;
+    let Window { start, i_lo, i_hi, j_lo, j_hi, width } = *window;
+    let py0 = j_lo * SUBPIXEL + half;
+    let rows = j_hi - j_lo;
+    // Per edge: value at (start, j_lo), offset of each lane (−D·l) and step per row (dx·S).
+    let mut value = [0i32; MAX_CLIPPED];
+    let mut lane_step = [[0i32; LANES]; MAX_CLIPPED];
+    let mut row_step = [0i32; MAX_CLIPPED];
+    let limit = i32::MAX as i64 / 2;
+    for k in 0..m {
+        let k1 = if k + 1 == m { 0 } else { k + 1 };
+        let (dx, dy) = (xs[k1] - xs[k], ys[k1] - ys[k]);
+        let bias = if dy > 0 || (dy == 0 && dx < 0) { 0 } else { 1 };
+        let d = dy * SUBPIXEL;
+        let step = dx * SUBPIXEL;
+        let v0 = dx * py0 + dy * xs[k] - dx * ys[k] - dy * half - bias - d * start;
+        // Linear over the block: in range at its four corners means in range everywhere.
+        let last_lane = -d * (LANES as i64 - 1);
+        let last_row = step * rows;
+        for corner in [v0, v0 + last_lane, v0 + last_row, v0 + last_lane + last_row] {
+            if corner.abs() > limit {
+                return false;
+            }
+        }
+        if d.abs() > limit || step.abs() > limit {
+            return false;
+        }
+        value[k] = v0 as i32;
+        for (l, s) in lane_step[k].iter_mut().enumerate() {
+            *s = (-d * l as i64) as i32;
+        }
+        row_step[k] = step as i32;
+    }
+    let mut lane_ok = [false; LANES];
+    for (l, ok) in lane_ok.iter_mut().enumerate() {
+        let i = start + l as i64;
+        *ok = i >= i_lo && i <= i_hi;
+    }
+    let [pa, pb, pc] = plane;
+    let start = start as usize;
+    let mut lane_depth = [0f32; LANES];
+    for (l, d) in lane_depth.iter_mut().enumerate() {
+        // Same expression as the span loop (i32 → f32 exact), so the depths are bit-identical.
+        *d = pa * (start as i32 + l as i32) as f32;
+    }
+    for j in j_lo..=j_hi {
+        let mut inside = lane_ok;
+        for k in 0..m {
+            let v = value[k];
+            for (inside, &s) in inside.iter_mut().zip(&lane_step[k]) {
+                *inside &= v + s >= 0;
+            }
+            value[k] = v + row_step[k];
+        }
+        let row = j as usize * width + start;
+        let row_depth = pb * (j as f32 + 0.5) + pc + pa * 0.5;
+        let depth: &mut [f32; LANES] = (&mut inverse_depth[row..row + LANES]).try_into().expect("block in row");
+        let ids: &mut [u32; LANES] = (&mut items[row..row + LANES]).try_into().expect("block in row");
+        for l in 0..LANES {
+            let candidate = row_depth + lane_depth[l];
+            let wins = inside[l] & (candidate > depth[l]);
+            let mask = (wins as u32).wrapping_neg();
+            depth[l] = if wins { candidate } else { depth[l] };
+            ids[l] = (ids[l] & !mask) | (item & mask);
+        }
+    }
+    true
 }
 
 /// Form factors from a point to each polygon of a scene by one hemicube (Nusselt analog, Cohen and
