@@ -265,6 +265,9 @@ pub fn compute_extended(
     compute_rows(mesh, params, any.then_some(specular), on_element_done)
 }
 
+/// One computed row: entries (plain, then extended), the length of the plain part, the ray cost.
+type ComputedRow = (Vec<(u32, f32)>, usize, SpecularStats);
+
 fn compute_rows(
     mesh: &Mesh,
     params: &RadiosityParams,
@@ -280,7 +283,7 @@ fn compute_rows(
     ff.row_start.push(0);
     for batch_start in (0..n).step_by(BATCH_ROWS) {
         let batch = batch_start..(batch_start + BATCH_ROWS).min(n);
-        let rows: Vec<(Vec<(u32, f32)>, usize, SpecularStats)> = batch
+        let rows: Vec<ComputedRow> = batch
             .into_par_iter()
             .map_init(
                 || ItemBuffer::new(&hc),

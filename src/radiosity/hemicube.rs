@@ -561,34 +561,6 @@ pub fn newell_plane(poly: &[Vec3]) -> (Vec3, Vec3) {
     (n.normalize_or_zero(), c / poly.len() as f32)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fill_rule_covers_each_pixel_of_a_split_square_once() {
-        // Two triangles sharing a diagonal, rasterised with different ids: every covered pixel is won by
-        // exactly one of them and the union equals the square's pixels (no gaps, no double cover).
-        let (w, h) = (16usize, 16usize);
-        let mut depth = vec![0f32; w * h];
-        let mut ids = vec![u32::MAX; w * h];
-        let sq = [[2.0f32, 2.0], [10.0, 2.0], [10.0, 10.0], [2.0, 10.0]];
-        let mut count = vec![0u32; w * h];
-        for (id, tri) in [[sq[0], sq[1], sq[2]], [sq[0], sq[2], sq[3]]].iter().enumerate() {
-            depth.fill(0.0);
-            ids.fill(u32::MAX);
-            rasterise_convex(tri, w, h, [0.0, 0.0, 1.0], id as u32, &mut depth, &mut ids);
-            for p in 0..w * h {
-                if ids[p] != u32::MAX {
-                    count[p] += 1;
-                }
-            }
-        }
-        assert!(count.iter().all(|&c| c <= 1));
-        assert_eq!(count.iter().sum::<u32>(), 64);
-    }
-}
-
 /// Read-only access to the rasterised item buffer after a hemicube, for extended form factors through
 /// specular surfaces (`radiosity::specular`): which item each pixel shows, through which direction and
 /// with which delta form factor. Valid between `add_polygon` calls of one hemicube and the next `begin`
@@ -631,5 +603,33 @@ impl ItemBuffer {
         };
         let frame = &self.frame;
         (frame.tangent * p.x + frame.bitangent * p.y + frame.normal * p.z).normalize()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fill_rule_covers_each_pixel_of_a_split_square_once() {
+        // Two triangles sharing a diagonal, rasterised with different ids: every covered pixel is won by
+        // exactly one of them and the union equals the square's pixels (no gaps, no double cover).
+        let (w, h) = (16usize, 16usize);
+        let mut depth = vec![0f32; w * h];
+        let mut ids = vec![u32::MAX; w * h];
+        let sq = [[2.0f32, 2.0], [10.0, 2.0], [10.0, 10.0], [2.0, 10.0]];
+        let mut count = vec![0u32; w * h];
+        for (id, tri) in [[sq[0], sq[1], sq[2]], [sq[0], sq[2], sq[3]]].iter().enumerate() {
+            depth.fill(0.0);
+            ids.fill(u32::MAX);
+            rasterise_convex(tri, w, h, [0.0, 0.0, 1.0], id as u32, &mut depth, &mut ids);
+            for p in 0..w * h {
+                if ids[p] != u32::MAX {
+                    count[p] += 1;
+                }
+            }
+        }
+        assert!(count.iter().all(|&c| c <= 1));
+        assert_eq!(count.iter().sum::<u32>(), 64);
     }
 }
