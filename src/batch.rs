@@ -111,7 +111,9 @@ struct Cache {
     solutions: HashMap<u64, Arc<Solution>>,
 }
 
-/// FNV-1a over the bytes that decide form factors: positions, corners and hemicube settings.
+/// FNV-1a over the bytes that decide form factors: positions, corners, hemicube settings and, since
+/// extended form factors follow light through mirrors and glass, each element's specular material
+/// (Ks, Ni, 1 − d) and its diffuse/emissive flags (which decide where specular paths end).
 fn geometry_key(mesh: &Mesh, scene: &SceneDescription) -> u64 {
     let mut h: u64 = 0xcbf29ce484222325;
     let mut eat = |bytes: &[u8]| {
@@ -128,6 +130,18 @@ fn geometry_key(mesh: &Mesh, scene: &SceneDescription) -> u64 {
         for v in c {
             eat(&v.to_le_bytes());
         }
+    }
+    let e = &mesh.elements;
+    for i in 0..e.len() {
+        if let Some(m) = scene.materials.get(e.material[i] as usize).filter(|m| m.is_specular()) {
+            eat(&(i as u64).to_le_bytes());
+            for c in m.specular_reflectance.to_array() {
+                eat(&c.to_le_bytes());
+            }
+            eat(&m.ior.to_le_bytes());
+            eat(&m.transmittance.to_le_bytes());
+        }
+        eat(&[(e.reflectance[i].max_element() > 0.0) as u8, (e.emission[i].max_element() > 0.0) as u8]);
     }
     let r = &scene.radiosity;
     eat(&r.hemicube_resolution_px.to_le_bytes());
@@ -258,7 +272,8 @@ fn run_job(
             _ => {
                 cache.form_factors = None; // free the previous scene's matrix first
                 pipeline::check_memory(&scene, &mesh).map_err(Failure::input)?;
-                let ff = Arc::new(pipeline::compute_form_factors(&mesh, &scene.radiosity, progress, stats));
+                let accel = pipeline::specular_accel(&scene, &mesh);
+                let ff = Arc::new(pipeline::compute_form_factors(&scene, &mesh, accel.as_ref(), progress, stats));
                 cache.form_factors = Some((gkey, ff.clone()));
                 ff
             }

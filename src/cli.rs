@@ -363,7 +363,8 @@ pub fn pass_one(
         return Ok((mesh, black));
     }
     pipeline::check_memory(scene, &mesh).map_err(Failure::input)?;
-    let ff = pipeline::compute_form_factors(&mesh, &scene.radiosity, progress, stats);
+    let accel = pipeline::specular_accel(scene, &mesh);
+    let ff = pipeline::compute_form_factors(scene, &mesh, accel.as_ref(), progress, stats);
     let solution = pipeline::solve(&mesh, &ff, &scene.radiosity, progress, stats);
     Ok((mesh, solution))
 }

@@ -5,6 +5,7 @@ use crate::accel::Accel;
 use crate::film::{self, Image};
 use crate::mesh::{self, Mesh};
 use crate::progress::Progress;
+use crate::radiosity::specular::{self, SpecularPaths};
 use crate::radiosity::{form_factors, FormFactors, Solution};
 use crate::scene::{RadiosityParams, SceneDescription};
 use crate::trace::camera::PinholeCamera;
@@ -33,6 +34,12 @@ pub struct RunStats {
     pub form_factor_nonzeros: usize,
     pub form_factor_bytes: usize,
     pub hemicubes_per_second: f64,
+    /// Hemicube pixels that showed a mirror or glass and were followed by rays (0 without them).
+    pub specular_pixels: u64,
+    /// Rays traced for the extended form factors through specular surfaces.
+    pub specular_rays: u64,
+    /// Extended form-factor entries (part of `form_factor_nonzeros`).
+    pub extended_nonzeros: u64,
     pub solver: Option<String>,
     pub sweeps: u32,
     pub final_residual: f64,
@@ -118,16 +125,35 @@ pub fn check_memory(scene: &SceneDescription, mesh: &Mesh) -> Result<(), Pipelin
     Ok(())
 }
 
-/// Hemicube form factors of every element (rows only where an element reflects or emits).
+/// The ray accelerator pass one needs to follow light through mirrors and glass: built only when
+/// some element of the mesh is specular (`None` otherwise, and the form factors are plain).
+pub fn specular_accel(scene: &SceneDescription, mesh: &Mesh) -> Option<Accel> {
+    specular::mesh_has_specular(mesh, &scene.materials).then(|| Accel::build(&mesh.positions, &mesh.triangles))
+}
+
+/// Hemicube form factors of every element (rows only where an element reflects or emits), extended
+/// through the scene's specular surfaces when `accel` (from `specular_accel`) is given.
 pub fn compute_form_factors(
+    scene: &SceneDescription,
     mesh: &Mesh,
-    params: &RadiosityParams,
+    accel: Option<&Accel>,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> FormFactors {
+    let params = &scene.radiosity;
     let stage = progress.stage("form factors", mesh.elements.len() as u64, "elements");
     let start = Instant::now();
-    let ff = form_factors::compute(mesh, params, &|| stage.inc(1));
+    let ff = match accel {
+        Some(accel) => {
+            let paths = SpecularPaths::new(mesh, accel, &scene.materials).with_shading_normals(&scene.surfaces);
+            let (ff, specular_stats) = form_factors::compute_extended(mesh, params, &paths, &|| stage.inc(1));
+            stats.specular_pixels = specular_stats.pixels;
+            stats.specular_rays = specular_stats.rays;
+            stats.extended_nonzeros = specular_stats.entries;
+            ff
+        }
+        None => form_factors::compute(mesh, params, &|| stage.inc(1)),
+    };
     let seconds = start.elapsed().as_secs_f64();
     stats.elements = mesh.elements.len();
     stats.hemicube_resolution_px = params.hemicube_resolution_px;
@@ -135,8 +161,16 @@ pub fn compute_form_factors(
     stats.form_factor_nonzeros = ff.nnz();
     stats.form_factor_bytes = ff.memory_bytes();
     stats.hemicubes_per_second = mesh.elements.len() as f64 / seconds.max(1e-9);
+    let specular_note = if stats.specular_rays > 0 {
+        format!(
+            "; through specular surfaces: {} pixels, {} rays, {} extended entries",
+            stats.specular_pixels, stats.specular_rays, stats.extended_nonzeros
+        )
+    } else {
+        String::new()
+    };
     stage.finish(&format!(
-        "{} elements at {}², {:.0} hemicubes/s, {} non-zeros ({:.1} MiB)",
+        "{} elements at {}², {:.0} hemicubes/s, {} non-zeros ({:.1} MiB){specular_note}",
         mesh.elements.len(),
         params.hemicube_resolution_px,
         stats.hemicubes_per_second,

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
 use radray::mesh::Mesh;
-use radray::radiosity::solution::{fingerprint, SolutionFileError, FILE_MAGIC};
+use radray::radiosity::solution::{fingerprint, SolutionFileError, FILE_MAGIC, FILE_VERSION};
 use radray::radiosity::solver::{self, Shooter};
 use radray::radiosity::{FormFactors, Solution};
 use radray::scene::{
@@ -492,8 +492,12 @@ fn foreign_file_is_refused() {
 
 #[test]
 fn unsupported_version_is_refused() {
-    let err = load_damaged(|b| b[FILE_MAGIC.len()..FILE_MAGIC.len() + 4].copy_from_slice(&2u32.to_le_bytes()), 0);
-    assert!(matches!(err, SolutionFileError::UnsupportedVersion { found: 2, supported: 1, .. }), "{err:?}");
+    let next = FILE_VERSION + 1;
+    let err = load_damaged(|b| b[FILE_MAGIC.len()..FILE_MAGIC.len() + 4].copy_from_slice(&next.to_le_bytes()), 0);
+    assert!(
+        matches!(err, SolutionFileError::UnsupportedVersion { found, supported: FILE_VERSION, .. } if found == next),
+        "{err:?}"
+    );
 }
 
 #[test]

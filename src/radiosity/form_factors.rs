@@ -1,21 +1,31 @@
 //! The form-factor matrix, stored sparsely: one row per element, f32 values with u32 column indices
-//! (compressed sparse rows). Row i holds F_ij for the elements j that element i's hemicube sees.
+//! (compressed sparse rows). Row i holds F_ij for the elements j that element i's hemicube sees, then
+//! (in scenes with mirrors or glass) the extended entries Fˢ_ij through specular surfaces.
 //! `compute` builds it from a mesh, one hemicube per element in parallel; `estimate` predicts its cost.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::hemicube::{Hemicube, HemicubeFrame, ItemBuffer};
+use super::specular::{SpecularPaths, SpecularStats};
 use crate::mesh::Mesh;
 use crate::scene::RadiosityParams;
 
 /// Sparse form factors F_ij (compressed sparse rows).
+///
+/// Row i is its plain (straight-line) entries `row_start[i]..plain_end[i]` followed by its extended
+/// entries `plain_end[i]..row_start[i + 1]` through specular surfaces (Wallace, Cohen and Greenberg
+/// 1987). A column may appear in both parts; solvers sum over the whole row (`row`), the direct part
+/// of B uses only the plain part (`row_plain`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FormFactors {
     /// Row i occupies `row_start[i]..row_start[i + 1]` of `column` and `value`; length n + 1.
     pub row_start: Vec<usize>,
     pub column: Vec<u32>,
     pub value: Vec<f32>,
+    /// End of row i's plain part (`row_start[i] ≤ plain_end[i] ≤ row_start[i + 1]`); length n. When
+    /// empty (a matrix built by hand), every entry is plain.
+    pub plain_end: Vec<usize>,
 }
 
 impl FormFactors {
@@ -39,20 +49,41 @@ impl FormFactors {
         (&self.column[r.clone()], &self.value[r])
     }
 
-    /// Σ_j F_ij: 1 for an element inside a closed enclosure (within the hemicube's quadrature error).
+    fn plain_end_of(&self, i: usize) -> usize {
+        self.plain_end.get(i).copied().unwrap_or(self.row_start[i + 1])
+    }
+
+    /// Columns and values of row i's plain part: the straight-line form factors of the hemicube.
+    pub fn row_plain(&self, i: usize) -> (&[u32], &[f32]) {
+        let r = self.row_start[i]..self.plain_end_of(i);
+        (&self.column[r.clone()], &self.value[r])
+    }
+
+    /// Columns and values of row i's extended part: form factors through specular surfaces (empty in
+    /// a scene without them).
+    pub fn row_extended(&self, i: usize) -> (&[u32], &[f32]) {
+        let r = self.plain_end_of(i)..self.row_start[i + 1];
+        (&self.column[r.clone()], &self.value[r])
+    }
+
+    /// Σ_j (F_ij + Fˢ_ij): 1 for an element inside a closed diffuse enclosure (within the hemicube's
+    /// quadrature error); below 1 when part of the light arrives through mirrors or glass (Ks ≤ 1).
     pub fn row_sum(&self, i: usize) -> f64 {
         self.row(i).1.iter().map(|&v| v as f64).sum()
     }
 
-    /// F_ij (0 when not stored). Linear in the row length: for tests and diagnostics.
+    /// F_ij + Fˢ_ij (0 when not stored; every stored entry of column j counts). Linear in the row
+    /// length: for tests and diagnostics.
     pub fn get(&self, i: usize, j: usize) -> f64 {
         let (c, v) = self.row(i);
-        c.iter().position(|&k| k as usize == j).map_or(0.0, |p| v[p] as f64)
+        c.iter().zip(v).filter(|(&k, _)| k as usize == j).map(|(_, &f)| f as f64).sum()
     }
 
     /// Bytes held by the matrix.
     pub fn memory_bytes(&self) -> usize {
-        self.row_start.len() * std::mem::size_of::<usize>() + self.column.len() * 4 + self.value.len() * 4
+        (self.row_start.len() + self.plain_end.len()) * std::mem::size_of::<usize>()
+            + self.column.len() * 4
+            + self.value.len() * 4
     }
 
     /// Builds the sparse matrix from sparse rows (column, value), dropping zeros.
@@ -68,6 +99,7 @@ impl FormFactors {
             }
             ff.row_start.push(ff.column.len());
         }
+        ff.plain_end = ff.row_start[1..].to_vec();
         ff
     }
 
@@ -212,40 +244,89 @@ const BATCH_ROWS: usize = 1024;
 /// over elements (rayon, one item buffer per worker); every row depends only on the inputs, so the
 /// result is the same whatever the thread count. `on_element_done` is called once per element.
 pub fn compute(mesh: &Mesh, params: &RadiosityParams, on_element_done: &(dyn Fn() + Sync)) -> FormFactors {
+    compute_rows(mesh, params, None, on_element_done).0
+}
+
+/// `compute` plus the extended form factors through specular surfaces (Wallace, Cohen and Greenberg
+/// 1987; Sillion and Puech 1989): after each hemicube, the pixels that show a specular element are
+/// followed by rays (`SpecularPaths::extend_row`) and their row gets extended entries Fˢ_ij after its
+/// plain ones, so that B = E + ρ(F + Fˢ)B carries light that reaches diffuse surfaces through
+/// mirrors and glass. The plain entries of pure specular elements (Kd = 0, E = 0, so B = 0) are
+/// dropped: the paths through them replace them, and a row then sums to at most 1 (mirrors with
+/// Ks ≤ 1 create no energy). When the mesh has no specular element the result is `compute`'s, bit
+/// for bit.
+pub fn compute_extended(
+    mesh: &Mesh,
+    params: &RadiosityParams,
+    specular: &SpecularPaths,
+    on_element_done: &(dyn Fn() + Sync),
+) -> (FormFactors, SpecularStats) {
+    let any = (0..mesh.elements.len()).any(|j| specular.is_specular(j));
+    compute_rows(mesh, params, any.then_some(specular), on_element_done)
+}
+
+/// One computed row: entries (plain, then extended), the length of the plain part, the ray cost.
+type ComputedRow = (Vec<(u32, f32)>, usize, SpecularStats);
+
+fn compute_rows(
+    mesh: &Mesh,
+    params: &RadiosityParams,
+    specular: Option<&SpecularPaths>,
+    on_element_done: &(dyn Fn() + Sync),
+) -> (FormFactors, SpecularStats) {
     let hc = Hemicube::new(params.hemicube_resolution_px);
     let hierarchy = ElementHierarchy::new(mesh);
     let n = mesh.elements.len();
-    let mut ff = FormFactors { row_start: Vec::with_capacity(n + 1), ..Default::default() };
+    let mut ff =
+        FormFactors { row_start: Vec::with_capacity(n + 1), plain_end: Vec::with_capacity(n), ..Default::default() };
+    let mut stats = SpecularStats::default();
     ff.row_start.push(0);
     for batch_start in (0..n).step_by(BATCH_ROWS) {
         let batch = batch_start..(batch_start + BATCH_ROWS).min(n);
-        let rows: Vec<Vec<(u32, f32)>> = batch
+        let rows: Vec<ComputedRow> = batch
             .into_par_iter()
             .map_init(
                 || ItemBuffer::new(&hc),
                 |buffers, i| {
                     let mut row = Vec::new();
+                    let mut row_stats = SpecularStats::default();
+                    let mut plain = 0;
                     if needs_row(mesh, i) {
                         hierarchy.element_row(mesh, params, &hc, buffers, i, &mut row);
+                        if let Some(specular) = specular {
+                            row.retain(|&(j, _)| !specular.is_pure_specular(j as usize));
+                        }
+                        plain = row.len();
+                        if let Some(specular) = specular {
+                            // The item buffer still holds this hemicube's pixels.
+                            row_stats = specular.extend_row(&hc, buffers, params.seed, i, &mut row);
+                        }
                     }
                     on_element_done();
-                    row
+                    (row, plain, row_stats)
                 },
             )
             .collect();
-        for row in rows {
-            for (c, v) in row {
+        for (row, plain, row_stats) in rows {
+            stats += row_stats;
+            for (k, (c, v)) in row.into_iter().enumerate() {
+                if k == plain {
+                    ff.plain_end.push(ff.column.len());
+                }
                 if v != 0.0 {
                     ff.column.push(c);
                     ff.value.push(v);
                 }
+            }
+            if ff.plain_end.len() < ff.row_start.len() {
+                ff.plain_end.push(ff.column.len());
             }
             ff.row_start.push(ff.column.len());
         }
     }
     ff.column.shrink_to_fit();
     ff.value.shrink_to_fit();
-    ff
+    (ff, stats)
 }
 
 /// A rough prediction of `compute`'s cost, for `radray info`.

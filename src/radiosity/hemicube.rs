@@ -746,6 +746,51 @@ pub fn newell_plane(poly: &[Vec3]) -> (Vec3, Vec3) {
     (n.normalize_or_zero(), c / poly.len() as f32)
 }
 
+/// Read-only access to the rasterised item buffer after a hemicube, for extended form factors through
+/// specular surfaces (`radiosity::specular`): which item each pixel shows, through which direction and
+/// with which delta form factor. Valid between `add_polygon` calls of one hemicube and the next `begin`
+/// (`finish` leaves the pixels in place).
+impl ItemBuffer {
+    /// Calls `visit(pixel, item, ΔF)` for every pixel of the current hemicube that shows an item, in
+    /// buffer order (top face, then +x, −x, +y, −y). `pixel` is the buffer index for `pixel_direction`.
+    pub fn for_each_covered_pixel(&self, hc: &Hemicube, mut visit: impl FnMut(usize, u32, f32)) {
+        for (pixel, ((&z, &id), &df)) in self.inverse_depth.iter().zip(&self.item).zip(&hc.delta).enumerate() {
+            if z > 0.0 {
+                visit(pixel, id, df);
+            }
+        }
+    }
+
+    /// The item shown by buffer pixel `pixel` of the current hemicube, if any.
+    pub fn item_at(&self, pixel: usize) -> Option<u32> {
+        (self.inverse_depth.get(pixel).is_some_and(|&z| z > 0.0)).then(|| self.item[pixel])
+    }
+
+    /// The world-space unit direction from the current hemicube's eye through the centre of buffer
+    /// pixel `pixel`: on the top face local (x, y, 1) with x, y = −1 + (i + ½)·2/N; on a side face the
+    /// face point (u, v, 1) with u = −1 + (i + ½)·2/N and height v = (j + ½)·2/N, mapped back from face
+    /// coordinates (the inverse of `to_face`).
+    pub fn pixel_direction(&self, hc: &Hemicube, pixel: usize) -> Vec3 {
+        let n = hc.resolution_px;
+        let top = n * n;
+        let (f, local) =
+            if pixel < top { (0, pixel) } else { (1 + (pixel - top) / (n * n / 2), (pixel - top) % (n * n / 2)) };
+        let (i, j) = (local % n, local / n);
+        let step = 2.0 / n as f32;
+        let u = -1.0 + (i as f32 + 0.5) * step;
+        let v = if f == 0 { -1.0 + (j as f32 + 0.5) * step } else { (j as f32 + 0.5) * step };
+        let p = match f {
+            0 => Vec3::new(u, v, 1.0),
+            1 => Vec3::new(1.0, u, v),
+            2 => Vec3::new(-1.0, u, v),
+            3 => Vec3::new(u, 1.0, v),
+            _ => Vec3::new(u, -1.0, v),
+        };
+        let frame = &self.frame;
+        (frame.tangent * p.x + frame.bitangent * p.y + frame.normal * p.z).normalize()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,6 +6,7 @@ pub mod form_factors;
 pub mod hemicube;
 pub mod solution;
 pub mod solver;
+pub mod specular;
 
 pub use form_factors::FormFactors;
 pub use solution::Solution;

@@ -43,8 +43,10 @@ pub struct Solution {
 
 /// `RADRAYSO`: the first bytes of a solution file.
 pub const FILE_MAGIC: [u8; 8] = *b"RADRAYSO";
-/// Version of the solution file layout this build writes and reads.
-pub const FILE_VERSION: u32 = 1;
+/// Version of the solution file layout this build writes and reads. Version 2: the layout is that of
+/// version 1, but the exitances of scenes with mirrors or glass include light that reached diffuse
+/// surfaces through them (extended form factors), so version 1 files of such scenes are stale.
+pub const FILE_VERSION: u32 = 2;
 
 /// Why a solution file could not be written or read. Every message names the file.
 #[derive(Debug, thiserror::Error)]
@@ -130,14 +132,17 @@ pub fn fingerprint(mesh: &Mesh) -> u64 {
     h.finish()
 }
 
-/// ρ_i Σ_j F_ij E_j for every element: the emission received in one bounce and reflected (the direct
-/// part of B, emission excluded). Rows in parallel; each row is one `solver::gather`.
+/// ρ_i Σ_j F_ij E_j for every element: the emission received in one bounce along straight lines and
+/// reflected (the direct part of B, emission excluded). Only the plain entries count
+/// (`FormFactors::row_plain`): light arriving through mirrors and glass belongs to the indirect
+/// remainder, since pass two's shadow rays see only straight paths. Rows in parallel; each row is one
+/// `solver::gather`.
 pub fn direct_exitance(ff: &FormFactors, reflectance: &[Vec3], emission: &[Vec3]) -> Vec<DVec3> {
     let emission: Vec<DVec3> = emission.iter().map(|e| e.as_dvec3()).collect();
     (0..ff.len())
         .into_par_iter()
         .map(|i| {
-            let (columns, factors) = ff.row(i);
+            let (columns, factors) = ff.row_plain(i);
             reflectance[i].as_dvec3() * solver::gather(columns, factors, &emission)
         })
         .collect()
@@ -444,7 +449,7 @@ mod tests {
         fn parser_never_panics_on_arbitrary_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {
             let _ = Solution::from_bytes(&bytes, Path::new("random"), 0);
             let mut with_magic = FILE_MAGIC.to_vec();
-            with_magic.extend_from_slice(&1u32.to_le_bytes());
+            with_magic.extend_from_slice(&FILE_VERSION.to_le_bytes());
             with_magic.extend_from_slice(&bytes);
             let _ = Solution::from_bytes(&with_magic, Path::new("random"), 0);
         }

@@ -1,0 +1,363 @@
+//! Extended form factors through specular surfaces (Wallace, Cohen and Greenberg 1987; Sillion and
+//! Puech 1989): hemicube pixels that see a mirror or a dielectric are followed by rays with Whitted's
+//! rules until they reach diffuse elements, so that B = E + ρ(F + Fˢ)B carries light along LS+D paths.
+
+use glam::Vec3;
+
+use super::hemicube::{Hemicube, ItemBuffer};
+use crate::accel::Accel;
+use crate::mesh::{Mesh, NONE};
+use crate::rng::Pcg32;
+use crate::scene::{Material, Surface};
+use crate::trace::optics::{fresnel_dielectric, reflect, refract};
+
+/// Deepest specular chain followed from a hemicube pixel (bounces off or through specular surfaces).
+pub const MAX_DEPTH: u32 = 8;
+/// Branches whose throughput (mean over RGB) falls below this are dropped.
+pub const MIN_THROUGHPUT: f32 = 1e-3;
+/// Ray origins leave a surface by this fraction of the scene's size, as in pass two
+/// (`trace::whitted`).
+const RELATIVE_OFFSET: f32 = 1e-5;
+/// Resolution at which the specular part of a hemicube is sampled: the hemicube's pixels are grouped
+/// in blocks of s × s with s = max(1, N / SPECULAR_RESOLUTION_PX), and one path per block carries the
+/// summed ΔF of the block's specular pixels (from one of them, chosen uniformly by a generator seeded
+/// per element). Rays cost far more than rasterised pixels, and light through mirrors and glass is a
+/// secondary term: this keeps its cost to about 3·64² paths per hemicube at most, with the hemicube's
+/// O(1/N) error model at N = 64.
+pub const SPECULAR_RESOLUTION_PX: u32 = 64;
+/// Most rays on the explicit stack: one pop pushes at most two rays one level deeper.
+const STACK_SIZE: usize = MAX_DEPTH as usize + 2;
+
+/// True when some element of the mesh is specular (a material with Ks > 0 or a dielectric): only then
+/// do extended form factors differ from the plain ones.
+pub fn mesh_has_specular(mesh: &Mesh, materials: &[Material]) -> bool {
+    mesh.elements.material.iter().any(|&m| materials.get(m as usize).is_some_and(Material::is_specular))
+}
+
+/// What following the specular pixels of the hemicubes cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SpecularStats {
+    /// Hemicube pixels that showed a specular element (one path each).
+    pub pixels: u64,
+    /// Rays traced (closest-hit queries), all branches included.
+    pub rays: u64,
+    /// Extended entries Fˢ_ij stored.
+    pub entries: u64,
+}
+
+impl std::ops::AddAssign for SpecularStats {
+    fn add_assign(&mut self, o: SpecularStats) {
+        self.pixels += o.pixels;
+        self.rays += o.rays;
+        self.entries += o.entries;
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct StackRay {
+    origin: Vec3,
+    dir: Vec3,
+    throughput: Vec3,
+    depth: u32,
+}
+
+/// The scene as the specular path follower sees it: triangles in a BVH, materials per element, and
+/// (optionally) the surfaces' shading normals. Shared between threads (`&self`).
+pub struct SpecularPaths<'a> {
+    mesh: &'a Mesh,
+    accel: &'a Accel,
+    materials: &'a [Material],
+    surfaces: Option<&'a [Surface]>,
+    /// Per element: its material reflects or refracts specularly (paths go on through it).
+    specular: Vec<bool>,
+    /// Per element: specular with Kd = 0 and E = 0, so B = 0: it ends no path and holds no light.
+    pure_specular: Vec<bool>,
+    /// Distance ray origins are moved off a surface (scene units).
+    offset: f32,
+}
+
+impl<'a> SpecularPaths<'a> {
+    /// `accel` must be built from `mesh.triangles`; `materials` are indexed by `Elements::material`
+    /// (an element with a missing material counts as diffuse).
+    pub fn new(mesh: &'a Mesh, accel: &'a Accel, materials: &'a [Material]) -> Self {
+        assert_eq!(accel.len(), mesh.triangles.len(), "the accelerator is built from the mesh's triangles");
+        let e = &mesh.elements;
+        let specular: Vec<bool> =
+            e.material.iter().map(|&m| materials.get(m as usize).is_some_and(Material::is_specular)).collect();
+        let pure_specular = (0..e.len())
+            .map(|i| specular[i] && e.reflectance[i].max_element() <= 0.0 && e.emission[i].max_element() <= 0.0)
+            .collect();
+        let (lo, hi) = mesh
+            .positions
+            .iter()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let scale = if mesh.positions.is_empty() {
+            1.0
+        } else {
+            lo.abs().max(hi.abs()).max_element().max((hi - lo).max_element()).max(f32::MIN_POSITIVE)
+        };
+        SpecularPaths {
+            mesh,
+            accel,
+            materials,
+            surfaces: None,
+            specular,
+            pure_specular,
+            offset: RELATIVE_OFFSET * scale,
+        }
+    }
+
+    /// Bends specular rays with the surfaces' smooth-shading normals (the scene the mesh was built
+    /// from), as pass two does.
+    pub fn with_shading_normals(mut self, surfaces: &'a [Surface]) -> Self {
+        self.surfaces = Some(surfaces);
+        self
+    }
+
+    /// Element j reflects or refracts specularly.
+    pub fn is_specular(&self, j: usize) -> bool {
+        self.specular[j]
+    }
+
+    /// Element j is specular only (Kd = 0, E = 0): its exitance B_j is 0, so a plain entry F_ij is
+    /// useless once the paths through it are followed.
+    pub fn is_pure_specular(&self, j: usize) -> bool {
+        self.pure_specular[j]
+    }
+
+    /// Follows the ray `origin + t·dir` whose first hit is a specular element through mirrors and
+    /// dielectrics by Whitted's rules (Whitted 1980), on an explicit stack:
+    ///
+    /// mirror: T ← T·Ks;  dielectric: reflected T ← T·Ks·R, refracted T ← T·(1 − R)·(1 − d),
+    ///
+    /// R the unpolarised Fresnel reflectance (entering or leaving by the side hit; total internal
+    /// reflection gives R = 1 and no refracted branch). Whenever a later segment hits the front of an
+    /// element that is not pure specular (or the back of a two-sided one), `reach(j, T̄)` is called with
+    /// T̄ the branch's mean throughput over RGB; the branch ends there unless that element is also
+    /// specular. The back of a one-sided opaque surface absorbs. Branches end after `MAX_DEPTH` bounces
+    /// or below `MIN_THROUGHPUT`. With `first_hit_counts`, a first hit on a non-specular element (the
+    /// ray and the rasteriser disagreeing about a pixel on an edge) reaches it with T = 1, so that a
+    /// pixel whose plain entry was dropped keeps its ΔF. Returns the rays traced.
+    pub fn follow(&self, origin: Vec3, dir: Vec3, first_hit_counts: bool, mut reach: impl FnMut(u32, f32)) -> u64 {
+        let mesh = self.mesh;
+        let elements = &mesh.elements;
+        let mut stack = [StackRay::default(); STACK_SIZE];
+        stack[0] = StackRay { origin, dir: dir.normalize(), throughput: Vec3::ONE, depth: 0 };
+        let mut len = 1;
+        let mut rays = 0;
+        while len > 0 {
+            len -= 1;
+            let ray = stack[len];
+            rays += 1;
+            let Some(hit) = self.accel.closest_hit(ray.origin, ray.dir, 0.0, f32::INFINITY) else {
+                continue;
+            };
+            let t = hit.triangle as usize;
+            let front_element = mesh.triangle_element[t] as usize;
+            let normal = elements.normal[front_element];
+            let front = ray.dir.dot(normal) < 0.0;
+            let side = if front {
+                Some(front_element)
+            } else if mesh.triangle_back_element[t] != NONE {
+                Some(mesh.triangle_back_element[t] as usize)
+            } else {
+                None
+            };
+            let Some(material) = self.materials.get(elements.material[front_element] as usize) else {
+                continue;
+            };
+            match side {
+                // The first hit is the specular element the hemicube pixel showed: its plain entry holds
+                // whatever diffuse light it has.
+                Some(j) if !self.pure_specular[j] && (ray.depth > 0 || (first_hit_counts && !self.specular[j])) => {
+                    reach(j as u32, ray.throughput.element_sum() / 3.0);
+                }
+                Some(_) => {}
+                None if !material.is_dielectric() => continue, // back of a one-sided surface: absorbed
+                None => {}
+            }
+            if !self.specular[front_element] || ray.depth >= MAX_DEPTH {
+                continue;
+            }
+            let facing = if front { normal } else { -normal };
+            let bary = [1.0 - hit.u - hit.v, hit.u, hit.v];
+            let [i0, i1, i2] = mesh.triangles[t];
+            let p = mesh.positions[i0 as usize] * bary[0]
+                + mesh.positions[i1 as usize] * bary[1]
+                + mesh.positions[i2 as usize] * bary[2];
+            let shading = self
+                .surfaces
+                .map_or(facing, |surfaces| shading_normal(mesh, surfaces, front_element, p, facing, ray.dir));
+            let above = p + facing * self.offset;
+            let mut push = |origin: Vec3, dir: Vec3, throughput: Vec3| {
+                if throughput.element_sum() / 3.0 >= MIN_THROUGHPUT {
+                    assert!(len < STACK_SIZE, "specular stack overflow: depth is bounded so this cannot happen");
+                    stack[len] = StackRay { origin, dir, throughput, depth: ray.depth + 1 };
+                    len += 1;
+                }
+            };
+            if material.is_dielectric() {
+                let (eta_i, eta_t) = if front { (1.0, material.ior) } else { (material.ior, 1.0) };
+                let reflectance = fresnel_dielectric(-ray.dir.dot(shading), eta_i, eta_t);
+                push(
+                    above,
+                    mirror(ray.dir, shading, facing),
+                    ray.throughput * material.specular_reflectance * reflectance,
+                );
+                if reflectance < 1.0 {
+                    if let Some(refracted) = refract(ray.dir, shading, eta_i / eta_t).filter(|t| t.dot(facing) < 0.0) {
+                        let below = p - facing * self.offset;
+                        push(
+                            below,
+                            refracted.normalize(),
+                            ray.throughput * ((1.0 - reflectance) * material.transmittance),
+                        );
+                    }
+                }
+            } else if material.specular_reflectance.max_element() > 0.0 {
+                push(above, mirror(ray.dir, shading, facing), ray.throughput * material.specular_reflectance);
+            }
+        }
+        rays
+    }
+
+    /// The extended row of element `element`'s hemicube just rasterised in `buffers` (its pixels are
+    /// still in place after `ItemBuffer::finish`): the pixels that show a specular element are grouped
+    /// in blocks (see `SPECULAR_RESOLUTION_PX`); per block b, the path from the hemicube's eye through
+    /// the centre of one of its specular pixels (chosen with `Pcg32::new(seed, element)`) is followed
+    /// (`follow`) and
+    ///
+    /// Fˢ_ij = Σ_b (Σ_{p∈b specular} ΔF_p) · T_b→j
+    ///
+    /// summed over the blocks and branches reaching element j with throughput T (Wallace, Cohen and
+    /// Greenberg 1987, eq. 6: the form factor through a specular surface is its reflectance times the
+    /// form factor to the mirror image). Appends (j, Fˢ_ij) with increasing j to `row`; sums in f64 in
+    /// block order, so the result does not depend on threads.
+    pub fn extend_row(
+        &self,
+        hc: &Hemicube,
+        buffers: &ItemBuffer,
+        seed: u64,
+        element: usize,
+        row: &mut Vec<(u32, f32)>,
+    ) -> SpecularStats {
+        let eye = buffers.frame().eye;
+        let n = hc.resolution_px() as usize;
+        let stride = (n / SPECULAR_RESOLUTION_PX as usize).max(1);
+        let blocks_across = n.div_ceil(stride);
+        // Block of a buffer pixel: the top face is N × N, each side face N/2 rows of N.
+        let block_of = |pixel: usize| {
+            let (face, local) = if pixel < n * n {
+                (0, pixel)
+            } else {
+                (1 + (pixel - n * n) / (n * n / 2), (pixel - n * n) % (n * n / 2))
+            };
+            let (i, j) = (local % n, local / n);
+            let rows_before = if face == 0 { 0 } else { n.div_ceil(stride) + (face - 1) * (n / 2).div_ceil(stride) };
+            (rows_before + j / stride) * blocks_across + i / stride
+        };
+        let block_count = block_of(hc.pixel_count() - 1) + 1;
+        // Per block: Σ ΔF of its specular pixels, how many, and the one chosen (reservoir sampling).
+        let mut weight = vec![0.0f64; block_count];
+        let mut count = vec![0u32; block_count];
+        let mut chosen = vec![0usize; block_count];
+        let mut rng = Pcg32::new(seed, element as u64);
+        let mut stats = SpecularStats::default();
+        buffers.for_each_covered_pixel(hc, |pixel, item, delta| {
+            if !self.specular[item as usize] {
+                return;
+            }
+            stats.pixels += 1;
+            let b = block_of(pixel);
+            weight[b] += delta as f64;
+            count[b] += 1;
+            if count[b] == 1 || rng.next_f32() * (count[b] as f32) < 1.0 {
+                chosen[b] = pixel;
+            }
+        });
+        let mut reached: Vec<(u32, f64)> = Vec::new();
+        for b in 0..block_count {
+            if count[b] == 0 {
+                continue;
+            }
+            let pixel = chosen[b];
+            let dir = buffers.pixel_direction(hc, pixel);
+            let first_hit_counts = buffers.item_at(pixel).is_some_and(|item| self.pure_specular[item as usize]);
+            let w = weight[b];
+            stats.rays +=
+                self.follow(eye, dir, first_hit_counts, |j, throughput| reached.push((j, throughput as f64 * w)));
+        }
+        reached.sort_by_key(|&(j, _)| j); // stable: equal j keep block order
+        let mut k = 0;
+        while k < reached.len() {
+            let j = reached[k].0;
+            let mut sum = 0.0;
+            while k < reached.len() && reached[k].0 == j {
+                sum += reached[k].1;
+                k += 1;
+            }
+            if sum > 0.0 {
+                row.push((j, sum as f32));
+                stats.entries += 1;
+            }
+        }
+        stats
+    }
+}
+
+/// Mirror direction of `d` about the shading normal, or about the geometric normal `facing` when the
+/// shading normal would send it below the surface (as in `trace::whitted`).
+fn mirror(d: Vec3, shading: Vec3, facing: Vec3) -> Vec3 {
+    let r = reflect(d, shading);
+    if r.dot(facing) > 0.0 {
+        r
+    } else {
+        reflect(d, facing)
+    }
+}
+
+/// The shading normal at `p` on element `element`'s scene surface, oriented like `facing`: the
+/// surface's vertex normals interpolated linearly over the triangle (a quad: over the fan triangle
+/// (0,1,2) or (0,2,3) holding p). Falls back to `facing` where there is none or where it faces away
+/// from `incoming`. The same rule as pass two's (`trace::whitted`), so that both passes bend rays alike.
+pub fn shading_normal(
+    mesh: &Mesh,
+    surfaces: &[Surface],
+    element: usize,
+    p: Vec3,
+    facing: Vec3,
+    incoming: Vec3,
+) -> Vec3 {
+    let mesh_surface = mesh.elements.surface[element] as usize;
+    let Some(surface) = mesh.surface_source.get(mesh_surface).and_then(|&s| surfaces.get(s as usize)) else {
+        return facing;
+    };
+    let Some(normals) = &surface.shading_normals else {
+        return facing;
+    };
+    if normals.len() != surface.vertices.len() || surface.vertices.len() < 3 {
+        return facing;
+    }
+    let v = &surface.vertices;
+    let barycentric = |a: Vec3, b: Vec3, c: Vec3| {
+        let n = (b - a).cross(c - a);
+        let inv = 1.0 / n.length_squared();
+        let w1 = (p - a).cross(c - a).dot(n) * inv;
+        let w2 = (b - a).cross(p - a).dot(n) * inv;
+        (1.0 - w1 - w2, w1, w2)
+    };
+    let (w0, w1, w2) = barycentric(v[0], v[1], v[2]);
+    let n = if v.len() == 4 && w1 < 0.0 {
+        let (u0, u2, u3) = barycentric(v[0], v[2], v[3]);
+        normals[0] * u0 + normals[2] * u2 + normals[3] * u3
+    } else {
+        normals[0] * w0 + normals[1] * w1 + normals[2] * w2
+    };
+    let n = n.normalize_or_zero();
+    let n = if n.dot(facing) < 0.0 { -n } else { n };
+    if n.dot(incoming) < 0.0 {
+        n
+    } else {
+        facing
+    }
+}

@@ -1,0 +1,268 @@
+//! Extended form factors through specular surfaces (Wallace, Cohen and Greenberg 1987) against closed
+//! forms: a plane mirror shows the emitter's mirror image at Ks times its form factor, a glass slab
+//! passes the Fresnel transmittance of its two interfaces, closed boxes with mirrors create no energy,
+//! and diffuse scenes keep their plain form factors bit for bit.
+
+use glam::Vec3;
+use radray::accel::Accel;
+use radray::mesh::Mesh;
+use radray::radiosity::form_factors::{compute, compute_extended, FormFactors};
+use radray::radiosity::specular::{SpecularPaths, SPECULAR_RESOLUTION_PX};
+use radray::scene::{
+    Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SourceLoc, Surface,
+};
+use radray::trace::optics::fresnel_dielectric;
+
+const DIFFUSE: u32 = 0;
+const EMITTER: u32 = 1;
+const MIRROR: u32 = 2;
+const GLASS: u32 = 3;
+/// Mirror reflectance of the test mirrors.
+const KS: f32 = 0.8;
+
+fn materials() -> Vec<Material> {
+    let mut emitter = Material::diffuse("light", Vec3::ZERO);
+    emitter.emitted_radiance = Vec3::ONE;
+    let mut mirror = Material::diffuse("mirror", Vec3::ZERO);
+    mirror.specular_reflectance = Vec3::splat(KS);
+    let mut glass = Material::diffuse("glass", Vec3::ZERO);
+    glass.specular_reflectance = Vec3::ONE;
+    glass.ior = 1.5;
+    glass.transmittance = 1.0;
+    vec![Material::diffuse("grey", Vec3::splat(0.5)), emitter, mirror, glass]
+}
+
+/// One-sided surfaces (corners counter-clockwise about the front) with the materials above.
+fn scene(surfaces: Vec<(Vec<Vec3>, u32)>) -> SceneDescription {
+    SceneDescription {
+        path: "test.obj".into(),
+        camera: Camera { eye: Vec3::ZERO, look_at: Vec3::Z, up: Vec3::Y, vfov_deg: 40.0 },
+        image: ImageSettings::default(),
+        radiosity: RadiosityParams::default(),
+        render: RenderParams::default(),
+        materials: materials(),
+        surfaces: surfaces
+            .into_iter()
+            .map(|(vertices, material)| Surface {
+                vertices,
+                material,
+                two_sided: false,
+                shading_normals: None,
+                object: "test".into(),
+                source: SourceLoc::default(),
+            })
+            .collect(),
+        warnings: Vec::new(),
+    }
+}
+
+fn params(resolution_px: u32) -> RadiosityParams {
+    RadiosityParams { hemicube_resolution_px: resolution_px, rotate_hemicubes: false, ..Default::default() }
+}
+
+/// Plain and extended form factors of a scene's mesh.
+fn extended(scene: &SceneDescription, mesh: &Mesh, resolution_px: u32) -> FormFactors {
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let paths = SpecularPaths::new(mesh, &accel, &scene.materials);
+    compute_extended(mesh, &params(resolution_px), &paths, &|| {}).0
+}
+
+/// Axis-aligned rectangle at height y over [x0, x1] × [z0, z1], facing +y (`up`) or −y.
+fn horizontal(y: f32, (x0, x1): (f32, f32), (z0, z1): (f32, f32), up: bool) -> Vec<Vec3> {
+    let mut v = vec![Vec3::new(x0, y, z0), Vec3::new(x0, y, z1), Vec3::new(x1, y, z1), Vec3::new(x1, y, z0)];
+    if !up {
+        v.reverse();
+    }
+    v
+}
+
+/// Lambert's closed form for the form factor from a differential area at `p` with unit normal `n` to a
+/// polygon it fully sees: F = (1/2π) Σ_k γ_k n·(R_k × R_k+1)/|R_k × R_k+1|, γ_k the angle between the
+/// corner vectors R_k = v_k − p (orientation-free: the absolute value is returned).
+fn lambert(p: Vec3, n: Vec3, poly: &[Vec3]) -> f64 {
+    let mut sum = 0.0f64;
+    for k in 0..poly.len() {
+        let a = (poly[k] - p).as_dvec3().normalize();
+        let b = (poly[(k + 1) % poly.len()] - p).as_dvec3().normalize();
+        let c = a.cross(b);
+        sum += a.dot(b).clamp(-1.0, 1.0).acos() * n.as_dvec3().dot(c.normalize());
+    }
+    (sum / (2.0 * std::f64::consts::PI)).abs()
+}
+
+/// The hemicube's eye for a one-element surface: its centre lifted by 1e-3·√area along the normal
+/// (`form_factors::element_row`).
+fn eye(mesh: &Mesh, i: usize) -> Vec3 {
+    let e = &mesh.elements;
+    e.centre[i] + e.normal[i] * (1e-3 * e.area[i].sqrt())
+}
+
+/// N_s: the resolution at which a hemicube of resolution N samples its specular pixels.
+fn specular_resolution(n: u32) -> f64 {
+    n.min(SPECULAR_RESOLUTION_PX) as f64
+}
+
+fn sum_of(part: (&[u32], &[f32]), j: usize) -> f64 {
+    part.0.iter().zip(part.1).filter(|(&c, _)| c as usize == j).map(|(_, &f)| f as f64).sum()
+}
+
+/// A 0.1 m patch at y = 1 facing down onto an 8 m mirror (y = 0, Ks = 0.8); a 1 m² emitter at y = 1.5,
+/// also facing down, is behind the patch's plane (no direct view) but its mirror image (y = −1.5) is in
+/// full view. Then Fˢ(patch → emitter) = Ks × F(patch → mirror image) (Wallace et al. 1987), F by
+/// Lambert's closed form. One ray per block of specular pixels samples the image polygon as a
+/// hemicube of resolution N_s = min(N, SPECULAR_RESOLUTION_PX) samples a polygon, so the hemicube
+/// tolerance 0.5/N_s (README of point_to_polygon.json) applies, scaled by Ks, plus 1e-5 for f32 sums
+/// and ray offsets.
+#[test]
+fn plane_mirror_shows_the_emitter_image_at_ks_times_its_form_factor() {
+    let emitter = horizontal(1.5, (1.0, 2.0), (-0.5, 0.5), false);
+    let s = scene(vec![
+        (horizontal(1.0, (-0.05, 0.05), (-0.05, 0.05), false), DIFFUSE),
+        (horizontal(0.0, (-4.0, 4.0), (-4.0, 4.0), true), MIRROR),
+        (emitter.clone(), EMITTER),
+    ]);
+    let mesh = Mesh::build(&s, f32::INFINITY);
+    assert_eq!(mesh.elements.len(), 3);
+    for n in [128u32, 256] {
+        let ff = extended(&s, &mesh, n);
+        assert_eq!(sum_of(ff.row_plain(0), 2), 0.0, "no straight view of the emitter");
+        assert_eq!(sum_of(ff.row_plain(0), 1), 0.0, "the pure mirror's plain entry is dropped");
+        let image: Vec<Vec3> = emitter.iter().map(|v| Vec3::new(v.x, -v.y, v.z)).collect();
+        let expected = KS as f64 * lambert(eye(&mesh, 0), mesh.elements.normal[0], &image);
+        let got = sum_of(ff.row_extended(0), 2);
+        let tolerance = KS as f64 * 0.5 / specular_resolution(n) + 1e-5;
+        assert!((got - expected).abs() <= tolerance, "N = {n}: Fˢ = {got} vs Ks·F = {expected} (±{tolerance})");
+    }
+}
+
+/// Transmittance of a glass slab with n = 1.5 at incidence θ: two interfaces with reflectance R and
+/// the internal reflections between them, T = (1 − R)² Σ_k R^2k = (1 − R)/(1 + R).
+fn slab_transmittance(theta_rad: f32) -> f64 {
+    let r = fresnel_dielectric(theta_rad.cos(), 1.0, 1.5) as f64;
+    (1.0 - r) / (1.0 + r)
+}
+
+/// A 0.1 m patch on the floor facing up, a 2 m × 2 m emitter 2 m above facing down, and between them a
+/// 2 mm glass slab (n = 1.5, a closed box of six one-sided faces) covering the whole view. The
+/// emitter is then seen only through the slab: Fˢ = T(θ)·F with F the open form factor (Lambert) and T
+/// the slab's transmittance, which over the emitter's incidence angles θ ≤ θ_max ≈ 35° lies between
+/// T(θ_max) ≈ 0.917 and T(0) ≈ 0.923 (so a lossless slab, T = 1, fails). Tolerance: the hemicube's
+/// 0.5/N_s (as above) plus 2e-4 for the slab bringing the emitter's image t(1 − 1/n) ≈ 0.7 mm closer
+/// (F grows by ≈ 2·0.7 mm / 2 m ≈ 0.07 %) and the throughput cutoff (drops paths after R⁴ ≈ 3e-6).
+#[test]
+fn glass_slab_passes_its_fresnel_transmittance() {
+    let emitter = horizontal(2.0, (-1.0, 1.0), (-1.0, 1.0), false);
+    let (y0, y1, w) = (0.9f32, 0.902f32, 6.0f32);
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let slab = vec![
+        horizontal(y1, (-w, w), (-w, w), true),
+        horizontal(y0, (-w, w), (-w, w), false),
+        vec![c(w, y0, -w), c(w, y1, -w), c(w, y1, w), c(w, y0, w)],
+        vec![c(-w, y0, -w), c(-w, y0, w), c(-w, y1, w), c(-w, y1, -w)],
+        vec![c(-w, y0, w), c(w, y0, w), c(w, y1, w), c(-w, y1, w)],
+        vec![c(-w, y0, -w), c(-w, y1, -w), c(w, y1, -w), c(w, y0, -w)],
+    ];
+    let mut surfaces = vec![(horizontal(0.0, (-0.05, 0.05), (-0.05, 0.05), true), DIFFUSE), (emitter.clone(), EMITTER)];
+    surfaces.extend(slab.into_iter().map(|p| (p, GLASS)));
+    let s = scene(surfaces);
+    let mesh = Mesh::build(&s, f32::INFINITY);
+    // Every slab face points outwards.
+    for i in 2..8 {
+        assert!(mesh.elements.normal[i].dot(mesh.elements.centre[i] - Vec3::new(0.0, 0.901, 0.0)) > 0.0, "face {i}");
+    }
+    let n = 256u32;
+    let ff = extended(&s, &mesh, n);
+    assert_eq!(sum_of(ff.row_plain(0), 1), 0.0, "the slab hides the emitter from straight view");
+    let open = lambert(eye(&mesh, 0), Vec3::Y, &emitter);
+    let theta_max = (1.0f32.hypot(1.0) / 2.0).atan();
+    let tolerance = 0.5 / specular_resolution(n) + 2e-4;
+    let got = sum_of(ff.row_extended(0), 1);
+    let (lo, hi) = (slab_transmittance(theta_max) * open, slab_transmittance(0.0) * open);
+    assert!(
+        got >= lo - tolerance && got <= hi + tolerance,
+        "Fˢ = {got}, expected T·F in [{lo}, {hi}] ± {tolerance} (open F = {open})"
+    );
+}
+
+/// The unit cube, inward-facing, with an emitting ceiling; `mirror_floor` makes the floor a mirror.
+fn box_scene(mirror_floor: bool) -> SceneDescription {
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let floor = horizontal(0.0, (0.0, 1.0), (0.0, 1.0), true);
+    let ceiling = horizontal(1.0, (0.0, 1.0), (0.0, 1.0), false);
+    let walls = vec![
+        vec![c(0.0, 0.0, 0.0), c(1.0, 0.0, 0.0), c(1.0, 1.0, 0.0), c(0.0, 1.0, 0.0)],
+        vec![c(0.0, 0.0, 1.0), c(0.0, 1.0, 1.0), c(1.0, 1.0, 1.0), c(1.0, 0.0, 1.0)],
+        vec![c(0.0, 0.0, 0.0), c(0.0, 1.0, 0.0), c(0.0, 1.0, 1.0), c(0.0, 0.0, 1.0)],
+        vec![c(1.0, 0.0, 0.0), c(1.0, 0.0, 1.0), c(1.0, 1.0, 1.0), c(1.0, 1.0, 0.0)],
+    ];
+    let mut surfaces = vec![(floor, if mirror_floor { MIRROR } else { DIFFUSE }), (ceiling, EMITTER)];
+    surfaces.extend(walls.into_iter().map(|w| (w, DIFFUSE)));
+    scene(surfaces)
+}
+
+/// In a closed box whose floor is a mirror (Ks = 0.8) every ray through a mirror pixel reflects once
+/// (the floor is the only mirror and the reflected ray goes up) onto a diffuse wall (at N = 64 every
+/// specular pixel is its own block), so each diffuse
+/// row sums to Σ_diffuse F + Ks·F_mirror with F_mirror the dropped plain share of the mirror: at most
+/// Σ ΔF ≤ 1 + 1/N² (mirrors with Ks ≤ 1 create no energy), and at least that figure less 1 % of the
+/// mirrored share.
+#[test]
+fn mirror_box_rows_sum_to_at_most_one() {
+    let s = box_scene(true);
+    let mesh = Mesh::build(&s, 0.25 * 1.0001);
+    let n = 64u32;
+    let plain = compute(&mesh, &params(n), &|| {});
+    let ff = extended(&s, &mesh, n);
+    let mirror: Vec<bool> = (0..mesh.elements.len()).map(|j| mesh.elements.material[j] == MIRROR).collect();
+    let mut rows = 0;
+    for i in 0..mesh.elements.len() {
+        if mirror[i] {
+            assert_eq!(ff.row(i).0.len(), 0, "a pure mirror needs no row");
+            continue;
+        }
+        let (cols, vals) = plain.row(i);
+        let (mut diffuse, mut mirrored) = (0.0, 0.0);
+        for (&j, &f) in cols.iter().zip(vals) {
+            if mirror[j as usize] {
+                mirrored += f as f64;
+            } else {
+                diffuse += f as f64;
+            }
+        }
+        let sum = ff.row_sum(i);
+        assert!(sum <= 1.0 + 1.0 / (n * n) as f64 + 1e-5, "row {i}: Σ(F + Fˢ) = {sum}");
+        let expected = diffuse + KS as f64 * mirrored;
+        // Lower bound: the mirror returns Ks of its share, less 1 % of that share. Observed deficits
+        // are ≤ 0.6 % of the mirrored share at N = 64 (up to 1.9e-3 absolute), not yet explained by
+        // edge disagreements between rays and the rasteriser (those add, not remove): see the report.
+        assert!(sum >= expected - 0.01 * mirrored, "row {i}: Σ(F + Fˢ) = {sum} vs {expected}");
+        if mirrored > 0.0 {
+            rows += 1;
+        }
+    }
+    assert!(rows > 50, "only {rows} rows see the mirror");
+}
+
+/// A scene without specular surfaces keeps exactly the plain form factors (no rays are traced), and
+/// the extended ones do not depend on the thread count.
+#[test]
+fn diffuse_scenes_keep_plain_form_factors_bit_for_bit() {
+    let s = box_scene(false);
+    let mesh = Mesh::build(&s, 0.25 * 1.0001);
+    let plain = compute(&mesh, &params(64), &|| {});
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let paths = SpecularPaths::new(&mesh, &accel, &s.materials);
+    let (ff, stats) = compute_extended(&mesh, &params(64), &paths, &|| {});
+    assert_eq!(stats.rays, 0);
+    assert_eq!(ff, plain);
+    for i in 0..ff.len() {
+        assert_eq!(ff.row_plain(i), ff.row(i));
+    }
+
+    let s = box_scene(true);
+    let mesh = Mesh::build(&s, 0.25 * 1.0001);
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| extended(&s, &mesh, 32))
+    };
+    assert_eq!(run(1), run(2));
+}
