@@ -84,11 +84,12 @@ fn benches(c: &mut Criterion) {
     let mut shot_exitance = emission.clone();
     g.bench_function("progressive select (linear scan)", |b| b.iter(|| brightest_unshot(&area, &unshot)));
     let mut k = 0;
+    let received_by = ff.transpose();
     g.bench_function("progressive shoot (one row)", |b| {
         b.iter(|| {
             k = (k + 1) % ELEMENTS;
             unshot[k] = DVec3::ONE;
-            shoot(ff, k, &reflectance, &area, &mut shot_exitance, &mut unshot)
+            shoot(&received_by, k, &reflectance, &area, &mut shot_exitance, &mut unshot)
         })
     });
     for (solver, name) in [

@@ -86,6 +86,33 @@ impl FormFactors {
             + self.value.len() * 4
     }
 
+    /// The transpose: row j of the result lists (i, F_ij) for every stored F_ij — who receives from j,
+    /// with the receivers' own (gathering) factors. Plain and extended entries are merged.
+    pub fn transpose(&self) -> FormFactors {
+        let n = self.len();
+        let mut count = vec![0usize; n + 1];
+        for &c in &self.column {
+            count[c as usize + 1] += 1;
+        }
+        for k in 0..n {
+            count[k + 1] += count[k];
+        }
+        let mut next = count.clone();
+        let mut column = vec![0u32; self.nnz()];
+        let mut value = vec![0f32; self.nnz()];
+        for i in 0..n {
+            let (cols, vals) = self.row(i);
+            for (&j, &f) in cols.iter().zip(vals) {
+                let at = &mut next[j as usize];
+                column[*at] = i as u32;
+                value[*at] = f;
+                *at += 1;
+            }
+        }
+        let plain_end = count[1..].to_vec();
+        FormFactors { row_start: count, column, value, plain_end }
+    }
+
     /// Builds the sparse matrix from sparse rows (column, value), dropping zeros.
     pub fn from_rows(rows: Vec<Vec<(u32, f32)>>) -> Self {
         let mut ff = FormFactors { row_start: Vec::with_capacity(rows.len() + 1), ..Default::default() };

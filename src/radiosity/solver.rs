@@ -142,15 +142,19 @@ pub fn jacobi_sweep(
 }
 
 /// One shot of progressive refinement (Cohen, Chen, Wallace and Greenberg 1988): element i's unshot
-/// exitance ΔB_i leaves it, and every element j its hemicube saw receives, by reciprocity
-/// (F_ji = F_ij A_i / A_j),
+/// exitance ΔB_i leaves it, and every element j that sees it receives
 ///
-/// ΔB_j ← ΔB_j + ρ_j F_ij ΔB_i A_i / A_j,   B_j ← B_j + ρ_j F_ij ΔB_i A_i / A_j.
+/// ΔB_j ← ΔB_j + ρ_j F_ji ΔB_i,   B_j ← B_j + ρ_j F_ji ΔB_i,
+///
+/// with F_ji read from j's own hemicube (`received_by` is the transposed matrix: its row i lists
+/// (j, F_ji)). The classic algorithm uses i's hemicube and reciprocity, F_ji = F_ij A_i / A_j; hemicube
+/// factors are reciprocal only approximately (most visibly between neighbours), so with a stored
+/// matrix the receivers' factors make shooting converge to exactly the solution gathering finds.
 ///
 /// ΔB_i is zeroed before the distribution, so light an element sends to itself (F_ii ≠ 0) comes
 /// back as new unshot exitance. Returns the power shot, ΔB_i A_i (per channel).
 pub fn shoot(
-    ff: &FormFactors,
+    received_by: &FormFactors,
     shooter: usize,
     reflectance: &[DVec3],
     area: &[f64],
@@ -158,11 +162,12 @@ pub fn shoot(
     unshot_exitance: &mut [DVec3],
 ) -> DVec3 {
     let shot_power = unshot_exitance[shooter] * area[shooter];
+    let shot_exitance = unshot_exitance[shooter];
     unshot_exitance[shooter] = DVec3::ZERO;
-    let (columns, factors) = ff.row(shooter);
+    let (columns, factors) = received_by.row(shooter);
     for (&j, &f) in columns.iter().zip(factors) {
         let j = j as usize;
-        let received = reflectance[j] * shot_power * (f as f64 / area[j]);
+        let received = reflectance[j] * shot_exitance * f as f64;
         exitance[j] += received;
         unshot_exitance[j] += received;
     }
@@ -220,8 +225,9 @@ pub fn brightest_unshot(area: &[f64], unshot_exitance: &[DVec3]) -> (Option<usiz
 /// unshot power Σ_i ΔB_i A_i divided by the emitted power Σ_i E_i A_i. It starts at 1 and falls
 /// towards 0; the remaining error in B is at most ρ_max/(1 − ρ_max) · max_i ΔB_i.
 #[derive(Clone, Debug)]
-pub struct Shooter<'a> {
-    ff: &'a FormFactors,
+pub struct Shooter {
+    /// The transposed matrix: who receives from each shooter, with the receivers' factors.
+    received_by: FormFactors,
     reflectance: Vec<DVec3>,
     area: Vec<f64>,
     exitance: Vec<DVec3>,
@@ -233,16 +239,16 @@ pub struct Shooter<'a> {
     shots: u32,
 }
 
-impl<'a> Shooter<'a> {
+impl Shooter {
     /// Starts with B = ΔB = E.
-    pub fn new(ff: &'a FormFactors, reflectance: &[Vec3], emission: &[Vec3], area: &[f32]) -> Self {
+    pub fn new(ff: &FormFactors, reflectance: &[Vec3], emission: &[Vec3], area: &[f32]) -> Self {
         let n = ff.len();
         assert!(reflectance.len() == n && emission.len() == n && area.len() == n);
         let emission: Vec<DVec3> = emission.iter().map(|e| e.as_dvec3()).collect();
         let area: Vec<f64> = area.iter().map(|&a| a as f64).collect();
         let (next_shooter, unshot_power) = brightest_unshot(&area, &emission);
         Shooter {
-            ff,
+            received_by: ff.transpose(),
             reflectance: reflectance.iter().map(|r| r.as_dvec3()).collect(),
             area,
             exitance: emission.clone(),
@@ -257,7 +263,7 @@ impl<'a> Shooter<'a> {
     /// Shoots the element with the most unshot power; returns it, or `None` when nothing is left.
     pub fn step(&mut self) -> Option<usize> {
         let i = self.next_shooter?;
-        shoot(self.ff, i, &self.reflectance, &self.area, &mut self.exitance, &mut self.unshot_exitance);
+        shoot(&self.received_by, i, &self.reflectance, &self.area, &mut self.exitance, &mut self.unshot_exitance);
         self.shots += 1;
         (self.next_shooter, self.unshot_power) = brightest_unshot(&self.area, &self.unshot_exitance);
         Some(i)
@@ -479,13 +485,14 @@ mod tests {
 
     #[test]
     fn shot_conserves_power_by_reciprocity() {
-        // Row 0 sees elements 1 and 2 with F = 0.25 and 0.5; received power = ρ_j F_0j ΔB_0 A_0.
-        let ff = FormFactors::from_rows(vec![vec![(1, 0.25), (2, 0.5)], vec![], vec![]]);
+        // Element 0 (A = 2) is seen by 1 (A = 1) and 2 (A = 4) with reciprocal factors F_10 = 0.5 and
+        // F_20 = 0.25 (F_01 = 0.25, F_02 = 0.5): received power = ρ_j F_j0 ΔB_0 A_j = ρ_j F_0j ΔB_0 A_0.
+        let received_by = FormFactors::from_rows(vec![vec![(1, 0.5), (2, 0.25)], vec![], vec![]]);
         let rho = [DVec3::splat(0.5); 3];
         let area = [2.0, 1.0, 4.0];
         let mut b = [DVec3::splat(3.0), DVec3::ZERO, DVec3::ZERO];
         let mut db = b;
-        let shot = shoot(&ff, 0, &rho, &area, &mut b, &mut db);
+        let shot = shoot(&received_by, 0, &rho, &area, &mut b, &mut db);
         assert_eq!(shot, DVec3::splat(6.0));
         assert_eq!(db[0], DVec3::ZERO);
         assert!((b[1].x * area[1] - 0.5 * 0.25 * 6.0).abs() < 1e-15);
