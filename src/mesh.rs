@@ -287,6 +287,46 @@ impl Mesh {
         sum.iter().zip(&weight).map(|(&s, &w)| if w > 0.0 { s * (1.0 / w) } else { s }).collect()
     }
 
+    /// The shading normal at `p` on `element`'s scene surface, oriented like `facing`: the surface's
+    /// vertex normals (`Surface::shading_normals`) interpolated linearly over the triangle (a quad: over
+    /// the fan triangle (0,1,2) or (0,2,3) holding p). Falls back to `facing` where there is none or
+    /// where it faces away from `incoming`. Pass one's specular paths and pass two's Whitted rays both
+    /// bend by this rule.
+    pub fn shading_normal(&self, surfaces: &[Surface], element: usize, p: Vec3, facing: Vec3, incoming: Vec3) -> Vec3 {
+        let mesh_surface = self.elements.surface[element] as usize;
+        let Some(surface) = self.surface_source.get(mesh_surface).and_then(|&s| surfaces.get(s as usize)) else {
+            return facing;
+        };
+        let Some(normals) = &surface.shading_normals else {
+            return facing;
+        };
+        if normals.len() != surface.vertices.len() || surface.vertices.len() < 3 {
+            return facing;
+        }
+        let v = &surface.vertices;
+        let barycentric = |a: Vec3, b: Vec3, c: Vec3| {
+            let n = (b - a).cross(c - a);
+            let inv = 1.0 / n.length_squared();
+            let w1 = (p - a).cross(c - a).dot(n) * inv;
+            let w2 = (b - a).cross(p - a).dot(n) * inv;
+            (1.0 - w1 - w2, w1, w2)
+        };
+        let (w0, w1, w2) = barycentric(v[0], v[1], v[2]);
+        let n = if v.len() == 4 && w1 < 0.0 {
+            let (u0, u2, u3) = barycentric(v[0], v[2], v[3]);
+            normals[0] * u0 + normals[2] * u2 + normals[3] * u3
+        } else {
+            normals[0] * w0 + normals[1] * w1 + normals[2] * w2
+        };
+        let n = n.normalize_or_zero();
+        let n = if n.dot(facing) < 0.0 { -n } else { n };
+        if n.dot(incoming) < 0.0 {
+            n
+        } else {
+            facing
+        }
+    }
+
     /// Sum of element areas.
     pub fn total_area(&self) -> f64 {
         self.elements.area.iter().map(|&a| a as f64).sum()
