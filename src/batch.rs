@@ -7,7 +7,8 @@ use crate::cli::{self, BatchArgs, Failure, Mode, Overrides};
 use crate::mesh::Mesh;
 use crate::pipeline::{self, RunStats};
 use crate::progress::Progress;
-use crate::radiosity::{solution, FormFactors, Solution};
+use crate::radiosity::solution::{self, Fnv1a64};
+use crate::radiosity::{FormFactors, Solution};
 use crate::scene::{self, SceneDescription};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -115,44 +116,24 @@ struct Cache {
 /// extended form factors follow light through mirrors and glass, each element's specular material
 /// (Ks, Ni, 1 − d) and its diffuse/emissive flags (which decide where specular paths end).
 fn geometry_key(mesh: &Mesh, scene: &SceneDescription) -> u64 {
-    let mut h: u64 = 0xcbf29ce484222325;
-    let mut eat = |bytes: &[u8]| {
-        for &b in bytes {
-            h = (h ^ b as u64).wrapping_mul(0x100000001b3);
-        }
-    };
-    for p in &mesh.positions {
-        for c in p.to_array() {
-            eat(&c.to_le_bytes());
-        }
-    }
+    let mut h = Fnv1a64::default();
+    h.write_f32s(mesh.positions.iter().flat_map(|p| p.to_array()));
     for c in &mesh.elements.corners {
         for v in c {
-            eat(&v.to_le_bytes());
+            h.write(&v.to_le_bytes());
         }
     }
-    let e = &mesh.elements;
-    for i in 0..e.len() {
-        if let Some(m) = scene.materials.get(e.material[i] as usize).filter(|m| m.is_specular()) {
-            eat(&(i as u64).to_le_bytes());
-            for c in m.specular_reflectance.to_array() {
-                eat(&c.to_le_bytes());
-            }
-            eat(&m.ior.to_le_bytes());
-            eat(&m.transmittance.to_le_bytes());
-        }
-        eat(&[(e.reflectance[i].max_element() > 0.0) as u8, (e.emission[i].max_element() > 0.0) as u8]);
-    }
+    solution::hash_specular_materials(&mut h, mesh, &scene.materials);
     let r = &scene.radiosity;
-    eat(&r.hemicube_resolution_px.to_le_bytes());
-    eat(&[r.rotate_hemicubes as u8]);
-    eat(&r.seed.to_le_bytes());
-    h
+    h.write(&r.hemicube_resolution_px.to_le_bytes());
+    h.write(&[r.rotate_hemicubes as u8]);
+    h.write(&r.seed.to_le_bytes());
+    h.finish()
 }
 
 fn solution_key(mesh: &Mesh, scene: &SceneDescription) -> u64 {
     let r = &scene.radiosity;
-    let mut h = solution::fingerprint(mesh) ^ geometry_key(mesh, scene).rotate_left(17);
+    let mut h = solution::fingerprint(mesh, &scene.materials) ^ geometry_key(mesh, scene).rotate_left(17);
     for x in [r.relaxation.to_bits(), r.tolerance.to_bits(), r.max_iterations as u64, r.solver as u64] {
         h = (h ^ x).wrapping_mul(0x100000001b3);
     }
@@ -261,7 +242,7 @@ fn run_job(
         record.reused_form_factors = true;
         s.clone()
     } else if !scene.has_emitter() {
-        Arc::new(Solution::black(&mesh))
+        Arc::new(Solution::black(&mesh, &scene.materials))
     } else {
         let gkey = geometry_key(&mesh, &scene);
         let ff = match &cache.form_factors {
@@ -278,7 +259,7 @@ fn run_job(
                 ff
             }
         };
-        let solution = Arc::new(pipeline::solve(&mesh, &ff, &scene.radiosity, progress, stats));
+        let solution = Arc::new(pipeline::solve(&scene, &mesh, &ff, progress, stats));
         cache.solutions.insert(key, solution.clone());
         solution
     };

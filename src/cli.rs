@@ -355,17 +355,17 @@ pub fn pass_one(
     let mesh = pipeline::build_mesh(scene, progress).map_err(Failure::input)?;
     stats.elements = mesh.elements.len();
     if let Some(path) = solution_file {
-        let solution = Solution::load(path, solution::fingerprint(&mesh)).map_err(Failure::input)?;
+        let solution = Solution::load(path, solution::fingerprint(&mesh, &scene.materials)).map_err(Failure::input)?;
         return Ok((mesh, solution));
     }
     if !scene.has_emitter() {
-        let black = Solution::black(&mesh);
+        let black = Solution::black(&mesh, &scene.materials);
         return Ok((mesh, black));
     }
     pipeline::check_memory(scene, &mesh).map_err(Failure::input)?;
     let accel = pipeline::specular_accel(scene, &mesh);
     let ff = pipeline::compute_form_factors(scene, &mesh, accel.as_ref(), progress, stats);
-    let solution = pipeline::solve(&mesh, &ff, &scene.radiosity, progress, stats);
+    let solution = pipeline::solve(scene, &mesh, &ff, progress, stats);
     Ok((mesh, solution))
 }
 

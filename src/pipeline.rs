@@ -182,15 +182,16 @@ pub fn compute_form_factors(
 
 /// Solves B = E + ρ·F·B with the scene's solver.
 pub fn solve(
+    scene: &SceneDescription,
     mesh: &Mesh,
     ff: &FormFactors,
-    params: &RadiosityParams,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> Solution {
+    let params = &scene.radiosity;
     let stage = progress.stage("solving", params.max_iterations as u64, "sweeps");
     let start = Instant::now();
-    let solution = Solution::compute(mesh, ff, params, &mut |iteration, residual| {
+    let solution = Solution::compute(mesh, &scene.materials, ff, params, &mut |iteration, residual| {
         stage.set_position(iteration as u64);
         stage.set_message(format!("residual {residual:.2e}"));
     });

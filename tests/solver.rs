@@ -359,17 +359,20 @@ fn patch_scene(case: &Value, reflectance: &[Vec3], emission: &[Vec3]) -> SceneDe
     }
 }
 
-fn cornell_mesh() -> (Mesh, System) {
+/// The validation cube as a scene (for its materials), its mesh and its linear system.
+fn cornell_mesh() -> (SceneDescription, Mesh, System) {
     let (case, system) = cornell_cube();
-    let mesh = Mesh::build(&patch_scene(&case, &system.reflectance, &system.emission), f32::INFINITY);
+    let scene = patch_scene(&case, &system.reflectance, &system.emission);
+    let mesh = Mesh::build(&scene, f32::INFINITY);
     assert_eq!(mesh.elements.len(), system.ff.len());
-    (mesh, system)
+    (scene, mesh, system)
 }
 
 #[test]
 fn direct_part_is_first_bounce() {
-    let (mesh, system) = cornell_mesh();
-    let solution = Solution::compute(&mesh, &system.ff, &params(SolverKind::GaussSeidel, 1e-6), &mut |_, _| {});
+    let (scene, mesh, system) = cornell_mesh();
+    let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
+    let solution = Solution::compute(&mesh, &scene.materials, &system.ff, &gauss_seidel, &mut |_, _| {});
     // One Jacobi sweep from B = E is E + ρFE: the first bounce plus the emission.
     let one_bounce = RadiosityParams { max_iterations: 1, ..params(SolverKind::Jacobi, 0.0) };
     let (b1, _) = system.solve(&one_bounce);
@@ -428,45 +431,59 @@ fn progressive_ambient_term_makes_partial_solution_closer() {
     assert!(shooter.ambient_exitance().max_element() <= 1e-8 * max_abs(&reference));
 }
 
-fn solved_cornell() -> (Mesh, Solution) {
-    let (mesh, system) = cornell_mesh();
-    let solution = Solution::compute(&mesh, &system.ff, &params(SolverKind::GaussSeidel, 1e-6), &mut |_, _| {});
-    (mesh, solution)
+fn solved_cornell() -> (SceneDescription, Mesh, Solution) {
+    let (scene, mesh, system) = cornell_mesh();
+    let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
+    let solution = Solution::compute(&mesh, &scene.materials, &system.ff, &gauss_seidel, &mut |_, _| {});
+    (scene, mesh, solution)
 }
 
 #[test]
 fn solution_file_round_trips() {
-    let (mesh, solution) = solved_cornell();
-    assert_eq!(solution.mesh_fingerprint, fingerprint(&mesh));
+    let (scene, mesh, solution) = solved_cornell();
+    assert_eq!(solution.mesh_fingerprint, fingerprint(&mesh, &scene.materials));
     assert!(solution.stats.converged && !solution.stats.residual_history.is_empty());
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cornell.solution");
     solution.save(&path).unwrap();
-    let loaded = Solution::load(&path, fingerprint(&mesh)).unwrap();
+    let loaded = Solution::load(&path, fingerprint(&mesh, &scene.materials)).unwrap();
     assert_eq!(loaded, solution);
 }
 
 #[test]
-fn fingerprint_changes_with_geometry_or_colour() {
+fn fingerprint_changes_with_geometry_or_any_material_property() {
     let (case, system) = cornell_cube();
     let scene = patch_scene(&case, &system.reflectance, &system.emission);
-    let base = fingerprint(&Mesh::build(&scene, f32::INFINITY));
-    assert_eq!(base, fingerprint(&Mesh::build(&scene, f32::INFINITY)), "deterministic");
+    let of = |scene: &SceneDescription, edge: f32| fingerprint(&Mesh::build(scene, edge), &scene.materials);
+    let base = of(&scene, f32::INFINITY);
+    assert_eq!(base, of(&scene, f32::INFINITY), "deterministic");
+    assert_ne!(base, of(&scene, 0.2), "finer meshing");
     let mut recoloured = scene.clone();
     recoloured.materials[7].diffuse_reflectance.y += 0.01;
-    assert_ne!(base, fingerprint(&Mesh::build(&recoloured, f32::INFINITY)));
-    assert_ne!(base, fingerprint(&Mesh::build(&scene, 0.2)), "finer meshing");
+    assert_ne!(base, of(&recoloured, f32::INFINITY), "Kd");
+    // Ks, Ni and d steer the extended form factors, so each one makes a saved solution stale.
+    let mut mirrored = scene.clone();
+    mirrored.materials[7].specular_reflectance = Vec3::splat(0.5);
+    mirrored.materials[7].diffuse_reflectance *= 0.5;
+    let mirror = of(&mirrored, f32::INFINITY);
+    assert_ne!(base, mirror, "Ks");
+    let mut glass = mirrored.clone();
+    glass.materials[7].transmittance = 0.2;
+    assert_ne!(mirror, of(&glass, f32::INFINITY), "d");
+    let mut denser = glass.clone();
+    denser.materials[7].ior = 1.7;
+    assert_ne!(of(&glass, f32::INFINITY), of(&denser, f32::INFINITY), "Ni");
 }
 
 /// Saves the Cornell solution, lets `damage` change the bytes, loads them back.
 fn load_damaged(damage: impl FnOnce(&mut Vec<u8>), fingerprint_delta: u64) -> SolutionFileError {
-    let (mesh, solution) = solved_cornell();
+    let (scene, mesh, solution) = solved_cornell();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("damaged.solution");
     let mut bytes = solution.to_bytes();
     damage(&mut bytes);
     std::fs::write(&path, &bytes).unwrap();
-    let err = Solution::load(&path, fingerprint(&mesh) ^ fingerprint_delta).unwrap_err();
+    let err = Solution::load(&path, fingerprint(&mesh, &scene.materials) ^ fingerprint_delta).unwrap_err();
     assert!(err.to_string().contains(&path.display().to_string()), "the message names the file: {err}");
     err
 }
@@ -529,14 +546,14 @@ fn missing_file_is_an_io_error() {
 
 #[test]
 fn scene_without_emitter_solves_to_black() {
-    let (mesh, system) = cornell_mesh();
+    let (scene, mesh, system) = cornell_mesh();
     let mut dark = mesh.clone();
     dark.elements.emission.iter_mut().for_each(|e| *e = Vec3::ZERO);
-    let black = Solution::black(&dark);
-    assert_eq!(black.mesh_fingerprint, fingerprint(&dark));
+    let black = Solution::black(&dark, &scene.materials);
+    assert_eq!(black.mesh_fingerprint, fingerprint(&dark, &scene.materials));
     assert!(black.stats.converged);
     for solver in ALL_SOLVERS {
-        let computed = Solution::compute(&dark, &system.ff, &params(solver, 1e-6), &mut |_, _| {});
+        let computed = Solution::compute(&dark, &scene.materials, &system.ff, &params(solver, 1e-6), &mut |_, _| {});
         assert!(computed.stats.converged, "{solver:?}");
         assert_eq!(computed.element_exitance, black.element_exitance);
         assert_eq!(computed.vertex_exitance, black.vertex_exitance);

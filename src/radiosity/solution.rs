@@ -10,7 +10,7 @@ use super::form_factors::FormFactors;
 use super::solver;
 use crate::mesh::Mesh;
 use crate::output;
-use crate::scene::{RadiosityParams, SolverKind};
+use crate::scene::{Material, RadiosityParams, SolverKind};
 
 /// How a solve went.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -36,7 +36,7 @@ pub struct Solution {
     pub vertex_exitance: Vec<Vec3>,
     /// Area-weighted vertex averages of `element_direct_exitance`.
     pub vertex_direct_exitance: Vec<Vec3>,
-    /// Identifies the mesh (geometry, materials) the solution belongs to: see `fingerprint`.
+    /// Identifies the mesh and materials the solution belongs to: see `fingerprint`.
     pub mesh_fingerprint: u64,
     pub stats: SolveStats,
 }
@@ -68,7 +68,7 @@ pub enum SolutionFileError {
     Corrupted { path: PathBuf, reason: String },
     #[error(
         "{path}: solution was computed for a different scene or mesh; re-run `radray solve` \
-         (file's mesh fingerprint {found:016x}, current mesh {expected:016x})"
+         (file's fingerprint {found:016x}, current scene's {expected:016x})"
     )]
     Stale { path: PathBuf, expected: u64, found: u64 },
 }
@@ -112,11 +112,12 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
     h.finish()
 }
 
-/// Identifies a mesh for the solution cache: FNV-1a 64 over the vertex and element counts, the
-/// vertex positions, the element corners, reflectances and emissions (little-endian bit patterns, so
-/// the value is the same on every platform). Any change of geometry, meshing or material colours
-/// changes it.
-pub fn fingerprint(mesh: &Mesh) -> u64 {
+/// Identifies the scene a solution belongs to: FNV-1a 64 over the vertex and element counts, the
+/// vertex positions, the element corners, reflectances and emissions, and every element's specular
+/// material (`hash_specular_materials`), in little-endian bit patterns so the value is the same on
+/// every platform. Any change of geometry, meshing or material (Kd, Ke, and Ks/Ni/d, which steer the
+/// extended form factors through mirrors and glass) changes it.
+pub fn fingerprint(mesh: &Mesh, materials: &[Material]) -> u64 {
     let e = &mesh.elements;
     let mut h = Fnv1a64::default();
     h.write_u64(mesh.positions.len() as u64);
@@ -129,7 +130,24 @@ pub fn fingerprint(mesh: &Mesh) -> u64 {
     }
     h.write_f32s(e.reflectance.iter().flat_map(|r| r.to_array()));
     h.write_f32s(e.emission.iter().flat_map(|r| r.to_array()));
+    hash_specular_materials(&mut h, mesh, materials);
     h.finish()
+}
+
+/// Feeds `h` what decides where light goes at mirrors and glass: for each element with a specular
+/// material, its index, Ks, Ni and transmittance (1 − d), and for every element whether it is diffuse
+/// and whether it emits (where specular paths end). Shared by the solution fingerprint and the batch
+/// cache's geometry key, so both go stale together.
+pub fn hash_specular_materials(h: &mut Fnv1a64, mesh: &Mesh, materials: &[Material]) {
+    let e = &mesh.elements;
+    for i in 0..e.len() {
+        if let Some(m) = materials.get(e.material[i] as usize).filter(|m| m.is_specular()) {
+            h.write_u64(i as u64);
+            h.write_f32s(m.specular_reflectance.to_array());
+            h.write_f32s([m.ior, m.transmittance]);
+        }
+        h.write(&[(e.reflectance[i].max_element() > 0.0) as u8, (e.emission[i].max_element() > 0.0) as u8]);
+    }
 }
 
 /// ρ_i Σ_j F_ij E_j for every element: the emission received in one bounce along straight lines and
@@ -154,10 +172,12 @@ fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
 
 impl Solution {
     /// Pass one after the form factors: solves B = E + ρ·F·B with `params` (see `solver::solve_f64`),
-    /// adds the direct part, the vertex averages and the mesh fingerprint. `on_iteration` sees every
+    /// adds the direct part, the vertex averages and the fingerprint of `mesh` and `materials` (the
+    /// scene's material table, which `mesh.elements.material` indexes). `on_iteration` sees every
     /// sweep or shot.
     pub fn compute(
         mesh: &Mesh,
+        materials: &[Material],
         ff: &FormFactors,
         params: &RadiosityParams,
         on_iteration: &mut dyn FnMut(u32, f64),
@@ -171,20 +191,20 @@ impl Solution {
             element_direct_exitance: to_f32(&direct),
             vertex_exitance: to_f32(&mesh.vertex_average(&exitance)),
             vertex_direct_exitance: to_f32(&mesh.vertex_average(&direct)),
-            mesh_fingerprint: fingerprint(mesh),
+            mesh_fingerprint: fingerprint(mesh, materials),
             stats,
         }
     }
 
     /// The solution of a scene without emitters: everything black, converged without a sweep
     /// (`stats.solver` is Gauss-Seidel, nothing was run).
-    pub fn black(mesh: &Mesh) -> Solution {
+    pub fn black(mesh: &Mesh, materials: &[Material]) -> Solution {
         Solution {
             element_exitance: vec![Vec3::ZERO; mesh.elements.len()],
             element_direct_exitance: vec![Vec3::ZERO; mesh.elements.len()],
             vertex_exitance: vec![Vec3::ZERO; mesh.positions.len()],
             vertex_direct_exitance: vec![Vec3::ZERO; mesh.positions.len()],
-            mesh_fingerprint: fingerprint(mesh),
+            mesh_fingerprint: fingerprint(mesh, materials),
             stats: SolveStats {
                 solver: SolverKind::GaussSeidel,
                 iterations: 0,

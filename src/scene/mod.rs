@@ -143,7 +143,8 @@ pub enum DirectMode {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderParams {
     pub direct: DirectMode,
-    /// Shadow rays per emitter per diffuse hit when `direct = Pixel` (and for Phong highlights).
+    /// Shadow rays per diffuse hit when `direct = Pixel` (and per Phong highlight), shared by all
+    /// emitters: each ray goes to a point chosen over the emitters' total area, not one per emitter.
     pub light_samples: u32,
     pub max_depth: u32,
     /// Paths whose throughput falls below this (max channel) are dropped.
