@@ -134,7 +134,13 @@ fn geometry_key(mesh: &Mesh, scene: &SceneDescription) -> u64 {
 fn solution_key(mesh: &Mesh, scene: &SceneDescription) -> u64 {
     let r = &scene.radiosity;
     let mut h = solution::fingerprint(mesh, &scene.materials) ^ geometry_key(mesh, scene).rotate_left(17);
-    for x in [r.relaxation.to_bits(), r.tolerance.to_bits(), r.max_iterations as u64, r.solver as u64] {
+    for x in [
+        r.relaxation.to_bits(),
+        r.tolerance.to_bits(),
+        r.max_iterations as u64,
+        r.solver as u64,
+        r.store_form_factors as u64,
+    ] {
         h = (h ^ x).wrapping_mul(0x100000001b3);
     }
     h
@@ -243,6 +249,11 @@ fn run_job(
         s.clone()
     } else if !scene.has_emitter() {
         Arc::new(Solution::black(&mesh, &scene.materials))
+    } else if !scene.radiosity.store_form_factors {
+        let accel = pipeline::specular_accel(&scene, &mesh);
+        let solution = Arc::new(pipeline::solve_matrix_free(&scene, &mesh, accel.as_ref(), progress, stats));
+        cache.solutions.insert(key, solution.clone());
+        solution
     } else {
         let gkey = geometry_key(&mesh, &scene);
         let ff = match &cache.form_factors {

@@ -362,6 +362,11 @@ pub fn pass_one(
         let black = Solution::black(&mesh, &scene.materials);
         return Ok((mesh, black));
     }
+    if !scene.radiosity.store_form_factors {
+        let accel = pipeline::specular_accel(scene, &mesh);
+        let solution = pipeline::solve_matrix_free(scene, &mesh, accel.as_ref(), progress, stats);
+        return Ok((mesh, solution));
+    }
     pipeline::check_memory(scene, &mesh).map_err(Failure::input)?;
     let accel = pipeline::specular_accel(scene, &mesh);
     let ff = pipeline::compute_form_factors(scene, &mesh, accel.as_ref(), progress, stats);

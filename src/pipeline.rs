@@ -6,8 +6,8 @@ use crate::film::{self, Image};
 use crate::mesh::{self, Mesh};
 use crate::progress::Progress;
 use crate::radiosity::specular::{self, SpecularPaths};
-use crate::radiosity::{form_factors, FormFactors, Solution};
-use crate::scene::{RadiosityParams, SceneDescription};
+use crate::radiosity::{form_factors, progressive, FormFactors, Solution};
+use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
 use crate::trace::camera::PinholeCamera;
 use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
 use std::time::Instant;
@@ -17,7 +17,7 @@ use std::time::Instant;
 pub enum PipelineError {
     #[error("{scene}: meshing at max_element_edge = {edge} would make {elements} elements, more than radray handles ({limit}); use a larger max_element_edge or a coarser --quality")]
     TooManyElements { scene: String, edge: f32, elements: u64, limit: u64 },
-    #[error("{scene}: the form factors of {elements} elements at hemicube resolution {resolution} would need about {needed_gib:.1} GiB, but about {available_gib:.1} GiB is available; use a larger max_element_edge (memory grows with the square of the element count) or a lower hemicube_resolution")]
+    #[error("{scene}: the form factors of {elements} elements at hemicube resolution {resolution} would need about {needed_gib:.1} GiB, but about {available_gib:.1} GiB is available; use a larger max_element_edge (memory grows with the square of the element count), a lower hemicube_resolution, or solver = \"progressive\" with store_form_factors = false (no stored matrix: O(n) memory, one hemicube per shot; pair it with a looser tolerance such as 1e-2)")]
     OutOfMemory { scene: String, elements: usize, resolution: u32, needed_gib: f64, available_gib: f64 },
 }
 
@@ -108,7 +108,10 @@ pub fn peak_memory_bytes() -> u64 {
 
 /// Refuses a form-factor computation whose matrix could not fit in memory.
 pub fn check_memory(scene: &SceneDescription, mesh: &Mesh) -> Result<(), PipelineError> {
-    let bound = form_factor_bytes_bound(mesh, &scene.radiosity);
+    let mut bound = form_factor_bytes_bound(mesh, &scene.radiosity);
+    if scene.radiosity.solver == SolverKind::Progressive {
+        bound *= 2; // progressive refinement with a stored matrix also keeps its transpose
+    }
     if let Some(available) = available_memory_bytes() {
         // The bound is pessimistic by about 2× (an element sees part of the scene), hence the factor.
         if bound / 2 > available {
@@ -207,6 +210,42 @@ pub fn solve(
         if solution.stats.converged { "" } else { " (not converged: iteration cap)" }
     ));
     solution
+}
+
+/// Pass one without a stored matrix (`store_form_factors = false`): progressive refinement that
+/// rasterises each shooter's hemicube when it shoots (`radiosity::progressive`), extended through
+/// mirrors and glass when `accel` is given. Memory stays O(n) whatever the element count.
+pub fn solve_matrix_free(
+    scene: &SceneDescription,
+    mesh: &Mesh,
+    accel: Option<&Accel>,
+    progress: &Progress,
+    stats: &mut RunStats,
+) -> Solution {
+    let params = &scene.radiosity;
+    // Progress in per mille of the emitted power shot (the unshot fraction falls from 1 to 0).
+    let stage = progress.stage("shooting (matrix-free)", 1000, "‰ shot");
+    let start = Instant::now();
+    let paths = accel.map(|a| SpecularPaths::new(mesh, a, &scene.materials).with_shading_normals(&scene.surfaces));
+    let solved = progressive::solve(mesh, params, paths.as_ref(), &mut |shots, unshot_fraction| {
+        stage.set_position(((1.0 - unshot_fraction).clamp(0.0, 1.0) * 1000.0) as u64);
+        stage.set_message(format!("{shots} shots, unshot {unshot_fraction:.2e}"));
+    });
+    let seconds = start.elapsed().as_secs_f64();
+    stats.elements = mesh.elements.len();
+    stats.hemicube_resolution_px = params.hemicube_resolution_px;
+    stats.solve_seconds = seconds;
+    stats.hemicubes_per_second = solved.stats.iterations as f64 / seconds.max(1e-9);
+    stats.solver = Some("progressive (matrix-free)".to_string());
+    stats.sweeps = solved.stats.iterations;
+    stats.final_residual = solved.stats.residual_history.last().copied().unwrap_or(0.0);
+    stage.finish(&format!(
+        "progressive, matrix-free: {} shots, unshot fraction {:.2e}{}",
+        stats.sweeps,
+        stats.final_residual,
+        if solved.stats.converged { "" } else { " (not converged: shot cap; the ambient term stands in for the rest)" }
+    ));
+    Solution::from_element_values(mesh, &scene.materials, &solved.exitance, &solved.direct_exitance, solved.stats)
 }
 
 /// Pass two: traces the camera's rays through the scene and develops the film.

@@ -184,7 +184,7 @@ fn build_chunks(mesh: &Mesh) -> Vec<Chunk> {
 
 /// True when element i needs its row of F: it reflects or emits diffusely. Other elements (black,
 /// mirrors and glass with Kd = 0) only occlude.
-fn needs_row(mesh: &Mesh, i: usize) -> bool {
+pub(crate) fn needs_row(mesh: &Mesh, i: usize) -> bool {
     mesh.elements.reflectance[i].max_element() > 0.0 || mesh.elements.emission[i].max_element() > 0.0
 }
 

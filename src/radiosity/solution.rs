@@ -186,11 +186,24 @@ impl Solution {
         assert_eq!(ff.len(), e.len(), "one form-factor row per element");
         let (exitance, stats) = solver::solve_f64(ff, &e.reflectance, &e.emission, &e.area, params, on_iteration);
         let direct = direct_exitance(ff, &e.reflectance, &e.emission);
+        Solution::from_element_values(mesh, materials, &exitance, &direct, stats)
+    }
+
+    /// A solution from per-element exitance and its direct part (however they were solved): adds the
+    /// vertex averages and the fingerprint of `mesh` and `materials`.
+    pub fn from_element_values(
+        mesh: &Mesh,
+        materials: &[Material],
+        exitance: &[DVec3],
+        direct: &[DVec3],
+        stats: SolveStats,
+    ) -> Solution {
+        assert!(exitance.len() == mesh.elements.len() && direct.len() == mesh.elements.len());
         Solution {
-            element_exitance: to_f32(&exitance),
-            element_direct_exitance: to_f32(&direct),
-            vertex_exitance: to_f32(&mesh.vertex_average(&exitance)),
-            vertex_direct_exitance: to_f32(&mesh.vertex_average(&direct)),
+            element_exitance: to_f32(exitance),
+            element_direct_exitance: to_f32(direct),
+            vertex_exitance: to_f32(&mesh.vertex_average(exitance)),
+            vertex_direct_exitance: to_f32(&mesh.vertex_average(direct)),
             mesh_fingerprint: fingerprint(mesh, materials),
             stats,
         }

@@ -109,6 +109,10 @@ pub struct RadiosityParams {
     pub tolerance: f64,
     /// Cap on sweeps (gathering) or shots / element count (shooting).
     pub max_iterations: u32,
+    /// Keep the form-factor matrix (true, the default). False, allowed only with the progressive
+    /// solver, computes each shooter's row when it shoots and never stores the matrix: O(n) memory,
+    /// for scenes whose matrix would not fit.
+    pub store_form_factors: bool,
     /// Rotate each hemicube by a seeded random angle about its normal (against aliasing).
     pub rotate_hemicubes: bool,
     pub seed: u64,
@@ -123,6 +127,7 @@ impl Default for RadiosityParams {
             relaxation: 1.2,
             tolerance: 1e-4,
             max_iterations: 1000,
+            store_form_factors: true,
             rotate_hemicubes: true,
             seed: 0,
         }

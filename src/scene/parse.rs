@@ -79,6 +79,7 @@ struct RawRadiosity {
     relaxation: Option<S<f64>>,
     tolerance: Option<S<f64>>,
     max_iterations: Option<S<i64>>,
+    store_form_factors: Option<S<bool>>,
     rotate_hemicubes: Option<bool>,
     seed: Option<u64>,
 }
@@ -633,6 +634,16 @@ fn radiosity_params(
         p.tolerance = t;
     }
     p.max_iterations = loc.positive_int(&r.max_iterations, "max_iterations", 1, 1_000_000, p.max_iterations)?;
+    if let Some(store) = &r.store_form_factors {
+        p.store_form_factors = *store.get_ref();
+        if !p.store_form_factors && p.solver != SolverKind::Progressive {
+            return loc.error(
+                store.span(),
+                "store_form_factors = false needs solver = \"progressive\" (gathering solvers read the whole matrix \
+                 every sweep)",
+            );
+        }
+    }
     if let Some(b) = r.rotate_hemicubes {
         p.rotate_hemicubes = b;
     }
