@@ -272,8 +272,8 @@ fn diffuse_scenes_keep_plain_form_factors_bit_for_bit() {
 /// The same mirror scene with a 1 m × 1 m receiver, its entry to the emitter taken from light traced
 /// from the emitter (`SpecularPaths::with_light_paths`): Fˢ = Ks × the area-averaged form factor to the
 /// mirror image, the average by the midpoint rule over 20 × 20 points of Lambert's closed form (error
-/// < 0.1 %: F varies by ~10 % across the receiver, smoothly). Tolerance 5 %: about 4 standard errors
-/// of the photon estimate (1/√k with k ≈ 7000 photons landing on the receiver, from 2²⁰ photons sent
+/// < 0.1 %: F varies by ~10 % across the receiver, smoothly). Tolerance 5 %: about 3 standard errors
+/// of the photon estimate (1/√k with k ≈ 4000 photons landing on the receiver, from 2¹⁹ photons sent
 /// uniformly over the sphere of directions, since the emitter lies inside the mirror's bounding sphere),
 /// far below the 20 % (1 − Ks) a missing mirror factor would make.
 #[test]
