@@ -148,7 +148,12 @@ pub fn compute_form_factors(
     let start = Instant::now();
     let ff = match accel {
         Some(accel) => {
-            let paths = SpecularPaths::new(mesh, accel, &scene.materials).with_shading_normals(&scene.surfaces);
+            let paths = SpecularPaths::new(mesh, accel, &scene.materials)
+                .with_shading_normals(&scene.surfaces)
+                .with_light_paths(|count, trace| {
+                    use rayon::prelude::*;
+                    (0..count).into_par_iter().map(trace).collect()
+                });
             let (ff, specular_stats) = form_factors::compute_extended(mesh, params, &paths, &|| stage.inc(1));
             stats.specular_pixels = specular_stats.pixels;
             stats.specular_rays = specular_stats.rays;
@@ -262,6 +267,7 @@ pub fn render(
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
     let tracer =
         Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?.with_shading_normals(&scene.surfaces);
+    let tracer = if mode == TraceMode::Final { tracer.with_caustics() } else { tracer };
     let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
     let stage = progress.stage(
         if mode == TraceMode::Final { "render final" } else { "render radiosity" },

@@ -142,14 +142,27 @@ fn specular_cornell_box_final_is_closer_than_pure_radiosity() {
 }
 
 #[test]
-#[ignore = "open (issue 5): relMSE 0.0075 against the 0.005 bound; the caustic under the glass sphere is carried by \
-            extended form factors but blurred by 25 mm elements and Gouraud interpolation"]
 fn specular_cornell_box_final_is_within_the_issue_bound() {
-    // Bound from issue 5. The reference's caustics reach radray only through extended (specular-path)
-    // form factors, at element resolution.
-    let (image, final_, _) = specular_metrics(256);
-    if final_.errors.rel_mse > 0.005 {
+    // Bound from issue 5, over every pixel (nothing masked). The reference's caustics reach radray as
+    // light traced from the emitter through the spheres (`trace::caustics`): pass one's extended form
+    // factors to the emitter come from those photons, and pass two sharpens them per pixel by density
+    // estimation. Measured 0.00050 (0.0075 before, when the caustic came from hemicube paths at element
+    // resolution).
+    let (image, final_, radiosity) = specular_metrics(256);
+    println!(
+        "cornell_specular (hemicube 256): final relMSE {:.5} MARE {:.4}, radiosity relMSE {:.5} MARE {:.4}",
+        final_.errors.rel_mse,
+        final_.errors.mean_abs_rel_err,
+        radiosity.errors.rel_mse,
+        radiosity.errors.mean_abs_rel_err
+    );
+    if final_.errors.rel_mse > 0.005 || final_.errors.rel_mse >= radiosity.errors.rel_mse {
         let dir = keep_for_inspection("cornell_specular.final", &image, &reference("cornell_specular"));
-        panic!("relMSE {:.5} above 0.005; images in {}", final_.errors.rel_mse, dir.display());
+        panic!(
+            "relMSE {:.5} above 0.005 (or not below radiosity's {:.5}); images in {}",
+            final_.errors.rel_mse,
+            radiosity.errors.rel_mse,
+            dir.display()
+        );
     }
 }

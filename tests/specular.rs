@@ -233,8 +233,10 @@ fn mirror_box_rows_sum_to_at_most_one() {
         assert!(sum <= 1.0 + 1.0 / (n * n) as f64 + 1e-5, "row {i}: Σ(F + Fˢ) = {sum}");
         let expected = diffuse + KS as f64 * mirrored;
         // Lower bound: the mirror returns Ks of its share, less 1 % of that share. Observed deficits
-        // are ≤ 0.6 % of the mirrored share at N = 64 (up to 1.9e-3 absolute), not yet explained by
-        // edge disagreements between rays and the rasteriser (those add, not remove): see the report.
+        // are ≤ 0.6 % of the mirrored share at N = 64 (up to 1.9e-3 absolute). Their cause: of the
+        // 196 583 mirror paths, 205 reflected rays (and 165 first rays) find no hit in this closed
+        // box, because the accelerator's BVH misses walls hit exactly on an edge shared by two
+        // elements (see `bvh_hits_a_wall_exactly_on_a_shared_element_edge`).
         assert!(sum >= expected - 0.01 * mirrored, "row {i}: Σ(F + Fˢ) = {sum} vs {expected}");
         if mirrored > 0.0 {
             rows += 1;
@@ -265,4 +267,69 @@ fn diffuse_scenes_keep_plain_form_factors_bit_for_bit() {
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| extended(&s, &mesh, 32))
     };
     assert_eq!(run(1), run(2));
+}
+
+/// The same mirror scene with a 1 m × 1 m receiver, its entry to the emitter taken from light traced
+/// from the emitter (`SpecularPaths::with_light_paths`): Fˢ = Ks × the area-averaged form factor to the
+/// mirror image, the average by the midpoint rule over 20 × 20 points of Lambert's closed form (error
+/// < 0.1 %: F varies by ~10 % across the receiver, smoothly). Tolerance 5 %: about 3 standard errors
+/// of the photon estimate (1/√k with k ≈ 4000 photons landing on the receiver, from 2¹⁹ photons sent
+/// uniformly over the sphere of directions, since the emitter lies inside the mirror's bounding sphere),
+/// far below the 20 % (1 − Ks) a missing mirror factor would make.
+#[test]
+fn light_paths_give_the_mirror_images_form_factor() {
+    let emitter = horizontal(1.5, (1.0, 2.0), (-0.5, 0.5), false);
+    let s = scene(vec![
+        (horizontal(1.0, (-0.5, 0.5), (-0.5, 0.5), false), DIFFUSE),
+        (horizontal(0.0, (-4.0, 4.0), (-4.0, 4.0), true), MIRROR),
+        (emitter.clone(), EMITTER),
+    ]);
+    let mesh = Mesh::build(&s, f32::INFINITY);
+    assert_eq!(mesh.elements.len(), 3);
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let paths = SpecularPaths::new(&mesh, &accel, &s.materials)
+        .with_shading_normals(&s.surfaces)
+        .with_light_paths(|count, trace| (0..count).map(trace).collect());
+    let ff = compute_extended(&mesh, &params(128), &paths, &|| {}).0;
+    let image: Vec<Vec3> = emitter.iter().map(|v| Vec3::new(v.x, -v.y, v.z)).collect();
+    let m = 20;
+    let mut average = 0.0;
+    for a in 0..m {
+        for b in 0..m {
+            let p = Vec3::new(-0.5 + (a as f32 + 0.5) / m as f32, 1.0, -0.5 + (b as f32 + 0.5) / m as f32);
+            average += lambert(p, -Vec3::Y, &image) / (m * m) as f64;
+        }
+    }
+    let expected = KS as f64 * average;
+    let got = sum_of(ff.row_extended(0), 2);
+    assert!((got / expected - 1.0).abs() <= 0.05, "Fˢ = {got} vs Ks·F̄ = {expected}");
+}
+
+/// A reflected ray of the mirror box above that was lost: from the mirror floor it meets the wall z = 0
+/// at x = 0.5 exactly, the edge between two 0.25 m elements. The watertight triangle test hits the
+/// triangle (0.25,0,0), (0.5,0,0), (0.5,0.25,0) at t ≈ 0.1514, but obvhs' compressed-BVH node test is
+/// not conservative (slab test without the 1 + 2γ widening of Ize 2013): for a flat node (zero extent
+/// in z) entered exactly on its x boundary t_min and t_max are equal up to rounding, and both
+/// neighbouring nodes are culled. A fix belongs in `accel` (e.g. widen node boxes or build from padded
+/// boxes); it is the "lost mirror paths" deficit of `mirror_box_rows_sum_to_at_most_one`.
+#[test]
+#[ignore = "open: accel's BVH misses hits on shared edges of axis-aligned walls (obvhs node test not conservative)"]
+fn bvh_hits_a_wall_exactly_on_a_shared_element_edge() {
+    let s = box_scene(true);
+    let mesh = Mesh::build(&s, 0.25 * 1.0001);
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let origin = Vec3::new(0.546957, 0.00001, 0.015652344);
+    let dir = Vec3::new(-0.31010038, 0.9450678, -0.10336679);
+    let ray = radray::accel::WatertightRay::new(origin, dir);
+    let brute = mesh
+        .triangles
+        .iter()
+        .filter_map(|tri| {
+            let [a, b, c] = tri.map(|v| mesh.positions[v as usize]);
+            ray.intersect(a, b, c, 0.0, f32::INFINITY).map(|h| h.t)
+        })
+        .fold(f32::INFINITY, f32::min);
+    assert!(brute.is_finite(), "the ray meets a wall of the closed box");
+    let hit = accel.closest_hit(origin, dir, 0.0, f32::INFINITY);
+    assert_eq!(hit.map(|h| h.t), Some(brute), "BVH closest hit vs brute force");
 }

@@ -9,6 +9,7 @@ use crate::accel::Accel;
 use crate::mesh::{Mesh, NONE};
 use crate::rng::Pcg32;
 use crate::scene::{Material, Surface};
+use crate::trace::caustics::{trace_photons, Landing};
 use crate::trace::optics::{fresnel_dielectric, reflect, refract};
 
 /// Deepest specular chain followed from a hemicube pixel (bounces off or through specular surfaces).
@@ -74,6 +75,11 @@ pub struct SpecularPaths<'a> {
     pure_specular: Vec<bool>,
     /// Distance ray origins are moved off a surface (scene units).
     offset: f32,
+    /// Per element: it emits (E > 0).
+    emitter: Vec<bool>,
+    /// With `with_light_paths`: per receiving element, its extended entries to the emitters
+    /// (emitter element, Fˢ_ij) from light traced the other way, sorted by emitter.
+    light_rows: Option<Vec<Vec<(u32, f32)>>>,
 }
 
 impl<'a> SpecularPaths<'a> {
@@ -104,6 +110,8 @@ impl<'a> SpecularPaths<'a> {
             specular,
             pure_specular,
             offset: RELATIVE_OFFSET * scale,
+            emitter: e.emission.iter().map(|x| x.max_element() > 0.0).collect(),
+            light_rows: None,
         }
     }
 
@@ -111,6 +119,52 @@ impl<'a> SpecularPaths<'a> {
     /// from), as pass two does.
     pub fn with_shading_normals(mut self, surfaces: &'a [Surface]) -> Self {
         self.surfaces = Some(surfaces);
+        self
+    }
+
+    /// Extended form factors to the emitters from light traced from the emitters (Arvo 1986) instead
+    /// of from the receivers' hemicubes: the photons of `trace::caustics::trace_photons` (the same
+    /// ones pass two's caustic map uses) give, for receiver i and emitter j,
+    ///
+    /// Fˢ_ij = Σ_{photons from j landing on i} w̄_k / (π A_i),
+    ///
+    /// w̄_k the photon's sampling weight and specular tints (mean over RGB): by reciprocity
+    /// A_i Fˢ_ij B_j is the flux from j reaching i through mirrors and glass, Φ = Σ L_j w̄_k with
+    /// B_j = π L_j. A small focused caustic is sampled densely from the light but only by a few
+    /// hemicube blocks of each receiver; and pass one then holds exactly the element average of the
+    /// caustic that pass two sharpens. `extend_row` stops following hemicube paths into emitters.
+    /// Call after `with_shading_normals`; `run_batches` maps the photon batches (in parallel at the
+    /// call site). Assumes emitters are not also lit through specular paths in a way that matters
+    /// (their reflected light, Kd·irradiance, is then not carried along LS+D paths).
+    pub fn with_light_paths(
+        mut self,
+        run_batches: impl Fn(u32, &(dyn Fn(u32) -> (Vec<Landing>, u64) + Sync)) -> Vec<(Vec<Landing>, u64)>,
+    ) -> Self {
+        let Some(photons) = trace_photons(self.mesh, self.accel, self.materials, self.surfaces, run_batches) else {
+            return self;
+        };
+        let e = &self.mesh.elements;
+        let mut flux: Vec<Vec<(u32, f64)>> = vec![Vec::new(); e.len()];
+        for l in &photons.landings {
+            flux[l.element as usize].push((l.source, (l.throughput.element_sum() / 3.0) as f64));
+        }
+        let rows = flux
+            .into_iter()
+            .enumerate()
+            .map(|(i, mut entries)| {
+                entries.sort_by_key(|&(j, _)| j); // stable: photon order within an emitter
+                let scale = 1.0 / (std::f64::consts::PI * (e.area[i] as f64).max(f64::MIN_POSITIVE));
+                let mut row: Vec<(u32, f32)> = Vec::new();
+                for (j, w) in entries {
+                    match row.last_mut() {
+                        Some(last) if last.0 == j => last.1 = (last.1 as f64 + w * scale) as f32,
+                        _ => row.push((j, (w * scale) as f32)),
+                    }
+                }
+                row
+            })
+            .collect();
+        self.light_rows = Some(rows);
         self
     }
 
@@ -276,6 +330,7 @@ impl<'a> SpecularPaths<'a> {
             }
         });
         let mut reached: Vec<(u32, f64)> = Vec::new();
+        let light_paths = self.light_rows.is_some();
         for b in 0..block_count {
             if count[b] == 0 {
                 continue;
@@ -284,8 +339,15 @@ impl<'a> SpecularPaths<'a> {
             let dir = buffers.pixel_direction(hc, pixel);
             let first_hit_counts = buffers.item_at(pixel).is_some_and(|item| self.pure_specular[item as usize]);
             let w = weight[b];
-            stats.rays +=
-                self.follow(eye, dir, first_hit_counts, |j, throughput| reached.push((j, throughput as f64 * w)));
+            stats.rays += self.follow(eye, dir, first_hit_counts, |j, throughput| {
+                // With light paths, LS+D light comes from the photons (`with_light_paths`).
+                if !(light_paths && self.emitter[j as usize]) {
+                    reached.push((j, throughput as f64 * w));
+                }
+            });
+        }
+        if let Some(rows) = &self.light_rows {
+            reached.extend(rows[element].iter().map(|&(j, f)| (j, f as f64)));
         }
         reached.sort_by_key(|&(j, _)| j); // stable: equal j keep block order
         let mut k = 0;

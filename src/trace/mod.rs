@@ -3,6 +3,7 @@
 //! ray-stack tracer that the film calls once per sample.
 
 pub mod camera;
+pub mod caustics;
 pub mod optics;
 pub mod whitted;
 

@@ -8,6 +8,7 @@ use std::ops::AddAssign;
 
 use glam::Vec3;
 
+use super::caustics::{trace_photons, CausticMap, Landing};
 use super::optics::{fresnel_dielectric, reflect, refract};
 use crate::accel::Accel;
 use crate::mesh::{Mesh, NONE};
@@ -112,6 +113,10 @@ pub struct Tracer<'a> {
     offset: f32,
     /// The scene's surfaces, when their smooth-shading normals should bend specular rays.
     surfaces: Option<&'a [Surface]>,
+    /// Light traced from the emitters through mirrors and glass (`with_caustics`).
+    caustics: Option<CausticMap>,
+    /// The scene's size, which the caustic kernel is relative to.
+    scale: f32,
 }
 
 /// Which element a ray hit and on which side.
@@ -193,6 +198,8 @@ impl<'a> Tracer<'a> {
             emitters,
             offset: RELATIVE_OFFSET * scale,
             surfaces: None,
+            caustics: None,
+            scale,
         })
     }
 
@@ -202,6 +209,27 @@ impl<'a> Tracer<'a> {
     pub fn with_shading_normals(mut self, surfaces: &'a [Surface]) -> Self {
         self.surfaces = Some(surfaces);
         self
+    }
+
+    /// Traces a caustic map (`trace_photons`, batches in parallel; the photons pass one traced too) so that
+    /// `TraceMode::Final` shows LS+D light at pixel resolution: at a diffuse point the map's density
+    /// estimate replaces the same light at element resolution, ρ/π·(E_caustic(p) − Ẽ_caustic(p)), Ẽ its
+    /// per-element average Gouraud-interpolated as pass one's exitance is. Pass one's extended form
+    /// factors keep the amount of LS+D light; the map moves it where it belongs within the elements.
+    /// Call after `with_shading_normals`. Does nothing in a scene without specular surfaces.
+    pub fn with_caustics(mut self) -> Self {
+        use rayon::prelude::*;
+        let run = |count: u32, trace: &(dyn Fn(u32) -> (Vec<Landing>, u64) + Sync)| {
+            (0..count).into_par_iter().map(trace).collect::<Vec<_>>()
+        };
+        self.caustics = trace_photons(self.mesh, self.accel, self.materials, self.surfaces, run)
+            .map(|photons| CausticMap::new(self.mesh, &photons, self.scale));
+        self
+    }
+
+    /// The caustic map, if `with_caustics` made one.
+    pub fn caustics(&self) -> Option<&CausticMap> {
+        self.caustics.as_ref()
     }
 
     /// The shading normal at `p` on the element's scene surface, oriented like `facing`: the
@@ -305,13 +333,22 @@ impl<'a> Tracer<'a> {
                 } else {
                     (Vec3::ZERO, Vec3::ZERO)
                 };
+                // Caustic detail: the LS+D light at pixel resolution minus the same at element resolution.
+                let caustic = match &self.caustics {
+                    Some(map) if reflectance.max_element() > 0.0 => {
+                        reflectance
+                            * (map.irradiance(p, elements.surface[side.element])
+                                - map.smooth_irradiance(side.vertices, bary))
+                    }
+                    _ => Vec3::ZERO,
+                };
                 let diffuse = if pixel_direct {
                     let emission = elements.emission[side.element];
                     let direct = interpolate(&self.solution.vertex_direct_exitance, side.vertices, bary);
-                    let indirect = (exitance - emission - direct).max(Vec3::ZERO);
+                    let indirect = (exitance - emission - direct + caustic).max(Vec3::ZERO);
                     (emission + indirect) / PI + reflectance / PI * irradiance
                 } else {
-                    exitance / PI
+                    (exitance + caustic).max(Vec3::ZERO) / PI
                 };
                 radiance += ray.throughput * diffuse;
                 if let Some((_, n)) = highlight {
