@@ -233,7 +233,6 @@ impl ElementHierarchy {
         let normal = e.normal[i];
         let eye = e.centre[i] + normal * eye_offset(e.area[i]);
         buffers.begin(hc, HemicubeFrame::new(eye, normal, hemicube_rotation_rad(params, i)));
-        let mut corners = [Vec3::ZERO; 4];
         for chunk in &self.chunks {
             if let Some((n, offset)) = chunk.plane {
                 if n.dot(eye) <= offset {
@@ -247,11 +246,8 @@ impl ElementHierarchy {
                 if j == i {
                     continue;
                 }
-                let count = e.corner_count(j);
-                for (c, p) in corners.iter_mut().zip(e.polygon(&mesh.positions, j)) {
-                    *c = p;
-                }
-                buffers.add_polygon(hc, j as u32, &corners[..count], e.normal[j], e.centre[j]);
+                let corners = &e.corners[j][..e.corner_count(j)];
+                buffers.add_indexed_polygon(hc, j as u32, &mesh.positions, corners, e.normal[j], e.centre[j]);
             }
         }
         buffers.finish(hc, |j, f| row.push((j, f as f32)));
