@@ -5,6 +5,7 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::Mutex;
 
 use super::hemicube::{Hemicube, HemicubeFrame, ItemBuffer};
 use super::specular::{SpecularPaths, SpecularStats};
@@ -304,13 +305,14 @@ fn compute_rows(
         FormFactors { row_start: Vec::with_capacity(n + 1), plain_end: Vec::with_capacity(n), ..Default::default() };
     let mut stats = SpecularStats::default();
     ff.row_start.push(0);
-    for batch_start in (0..n).step_by(BATCH_ROWS) {
-        let batch = batch_start..(batch_start + BATCH_ROWS).min(n);
-        let rows: Vec<ComputedRow> = batch
+    let pool = BufferPool { hc: &hc, free: Mutex::new(Vec::new()) };
+    let compute_batch = |batch: std::ops::Range<usize>| -> Vec<ComputedRow> {
+        batch
             .into_par_iter()
             .map_init(
-                || ItemBuffer::new(&hc),
+                || pool.take(),
                 |buffers, i| {
+                    let buffers = buffers.get();
                     let mut row = Vec::new();
                     let mut row_stats = SpecularStats::default();
                     let mut plain = 0;
@@ -329,27 +331,77 @@ fn compute_rows(
                     (row, plain, row_stats)
                 },
             )
-            .collect();
-        for (row, plain, row_stats) in rows {
-            stats += row_stats;
-            for (k, (c, v)) in row.into_iter().enumerate() {
-                if k == plain {
-                    ff.plain_end.push(ff.column.len());
-                }
-                if v != 0.0 {
-                    ff.column.push(c);
-                    ff.value.push(v);
-                }
-            }
-            if ff.plain_end.len() < ff.row_start.len() {
-                ff.plain_end.push(ff.column.len());
-            }
-            ff.row_start.push(ff.column.len());
-        }
+            .collect()
+    };
+    // Batch k + 1 is computed while batch k is appended (serially, on one thread), so that no core
+    // waits for the append.
+    let mut pending = Vec::new();
+    for batch_start in (0..n).step_by(BATCH_ROWS) {
+        let batch = batch_start..(batch_start + BATCH_ROWS).min(n);
+        let (rows, ()) = rayon::join(|| compute_batch(batch), || append_rows(&mut ff, &mut stats, pending));
+        pending = rows;
     }
+    append_rows(&mut ff, &mut stats, pending);
     ff.column.shrink_to_fit();
     ff.value.shrink_to_fit();
     (ff, stats)
+}
+
+/// Appends computed rows to the matrix (dropping zeros) and adds up their ray statistics.
+fn append_rows(ff: &mut FormFactors, stats: &mut SpecularStats, rows: Vec<ComputedRow>) {
+    let entries: usize = rows.iter().map(|(row, _, _)| row.len()).sum();
+    ff.column.reserve(entries);
+    ff.value.reserve(entries);
+    for (row, plain, row_stats) in rows {
+        *stats += row_stats;
+        for (k, (c, v)) in row.into_iter().enumerate() {
+            if k == plain {
+                ff.plain_end.push(ff.column.len());
+            }
+            if v != 0.0 {
+                ff.column.push(c);
+                ff.value.push(v);
+            }
+        }
+        if ff.plain_end.len() < ff.row_start.len() {
+            ff.plain_end.push(ff.column.len());
+        }
+        ff.row_start.push(ff.column.len());
+    }
+}
+
+/// Item buffers kept across rayon jobs and batches: a job borrows one (`take`) and gives it back when
+/// done, so the 3N² pixel buffers are allocated (and page-faulted in) once per thread, not per job.
+struct BufferPool<'a> {
+    hc: &'a Hemicube,
+    free: Mutex<Vec<ItemBuffer>>,
+}
+
+impl BufferPool<'_> {
+    fn take(&self) -> PooledBuffer<'_> {
+        let buffer = self.free.lock().ok().and_then(|mut free| free.pop());
+        PooledBuffer { buffer: Some(buffer.unwrap_or_else(|| ItemBuffer::new(self.hc))), free: &self.free }
+    }
+}
+
+/// An item buffer on loan from a `BufferPool`; returned to it on drop.
+struct PooledBuffer<'a> {
+    buffer: Option<ItemBuffer>,
+    free: &'a Mutex<Vec<ItemBuffer>>,
+}
+
+impl PooledBuffer<'_> {
+    fn get(&mut self) -> &mut ItemBuffer {
+        self.buffer.as_mut().expect("present until drop")
+    }
+}
+
+impl Drop for PooledBuffer<'_> {
+    fn drop(&mut self) {
+        if let (Some(buffer), Ok(mut free)) = (self.buffer.take(), self.free.lock()) {
+            free.push(buffer);
+        }
+    }
 }
 
 /// A rough prediction of `compute`'s cost, for `radray info`.
