@@ -718,9 +718,11 @@ fn rasterise_convex(
         for (k, (z, id)) in depth.iter_mut().zip(ids.iter_mut()).enumerate() {
             // i32 → f32 is exact here (i < 2²⁴) and, unlike usize → f32, a single instruction.
             let candidate = row_depth + pa * (lo as i32 + k as i32) as f32;
-            // Branch-free so that it vectorises: max for the depth, a bit mask for the id.
-            let mask = ((candidate > *z) as u32).wrapping_neg();
-            *z = z.max(candidate);
+            // Branch-free so that it vectorises: a select for the depth (not f32::max, whose NaN rule
+            // costs instructions; the stored depth is never NaN), a bit mask for the id.
+            let wins = candidate > *z;
+            let mask = (wins as u32).wrapping_neg();
+            *z = if wins { candidate } else { *z };
             *id = (*id & !mask) | (item & mask);
         }
     }
