@@ -423,10 +423,10 @@ pub struct FormFactorEstimate {
 /// Model (fitted on the Cornell box at 5k and 10k elements, N = 32 and 256, release build on this
 /// project's 2-core machine): each row stores about min(n/2, N²/8) entries (an interior element sees
 /// roughly half of the others, and a hemicube resolves at most a fraction of its 3N² pixels into
-/// distinct items); a hemicube costs ≈ (125 + 1.1·N) ns per element considered (set-up plus one span
-/// per covered row) plus ≈ 2.5 ns per hemicube pixel (clear, depth test, accumulate), as measured
-/// (CPU time per hemicube) after the face-by-face drawing, the narrow-polygon fast path and the
-/// branch-free accumulation. A rough guide (±50 %), not a bound.
+/// distinct items); a hemicube costs ≈ (93 + 0.81·N) ns per element considered (set-up plus one span
+/// per covered row) plus ≈ 1.85 ns per hemicube pixel (clear, depth test, accumulate): the earlier fit
+/// scaled by the measured 0.74 of CPU time at 10k elements, N = 256, after per-vertex transforms and
+/// run-length accumulation (39.5 → 29.4 user-s). A rough guide (±50 %), not a bound.
 pub fn estimate(mesh: &Mesh, params: &RadiosityParams) -> FormFactorEstimate {
     let n = mesh.elements.len();
     let rows = (0..n).filter(|&i| needs_row(mesh, i)).count();
@@ -435,7 +435,7 @@ pub fn estimate(mesh: &Mesh, params: &RadiosityParams) -> FormFactorEstimate {
     let nnz = (rows as f64 * per_row) as u64;
     let matrix_bytes = nnz * 8 + (n as u64 + 1) * std::mem::size_of::<usize>() as u64;
     let threads = rayon::current_num_threads().max(1);
-    let per_hemicube_s = (125e-9 + 1.1e-9 * res) * n as f64 + 2.5e-9 * 3.0 * res * res;
+    let per_hemicube_s = (93e-9 + 0.81e-9 * res) * n as f64 + 1.85e-9 * 3.0 * res * res;
     let seconds = rows as f64 * per_hemicube_s / threads as f64;
     FormFactorEstimate { rows, nnz, matrix_bytes, seconds, threads }
 }
