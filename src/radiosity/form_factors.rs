@@ -5,6 +5,7 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::Mutex;
 
 use super::hemicube::{Hemicube, HemicubeFrame, ItemBuffer};
 use super::specular::{SpecularPaths, SpecularStats};
@@ -233,7 +234,6 @@ impl ElementHierarchy {
         let normal = e.normal[i];
         let eye = e.centre[i] + normal * eye_offset(e.area[i]);
         buffers.begin(hc, HemicubeFrame::new(eye, normal, hemicube_rotation_rad(params, i)));
-        let mut corners = [Vec3::ZERO; 4];
         for chunk in &self.chunks {
             if let Some((n, offset)) = chunk.plane {
                 if n.dot(eye) <= offset {
@@ -247,11 +247,8 @@ impl ElementHierarchy {
                 if j == i {
                     continue;
                 }
-                let count = e.corner_count(j);
-                for (c, p) in corners.iter_mut().zip(e.polygon(&mesh.positions, j)) {
-                    *c = p;
-                }
-                buffers.add_polygon(hc, j as u32, &corners[..count], e.normal[j], e.centre[j]);
+                let corners = &e.corners[j][..e.corner_count(j)];
+                buffers.add_indexed_polygon(hc, j as u32, &mesh.positions, corners, e.normal[j], e.centre[j]);
             }
         }
         buffers.finish(hc, |j, f| row.push((j, f as f32)));
@@ -308,13 +305,14 @@ fn compute_rows(
         FormFactors { row_start: Vec::with_capacity(n + 1), plain_end: Vec::with_capacity(n), ..Default::default() };
     let mut stats = SpecularStats::default();
     ff.row_start.push(0);
-    for batch_start in (0..n).step_by(BATCH_ROWS) {
-        let batch = batch_start..(batch_start + BATCH_ROWS).min(n);
-        let rows: Vec<ComputedRow> = batch
+    let pool = BufferPool { hc: &hc, free: Mutex::new(Vec::new()) };
+    let compute_batch = |batch: std::ops::Range<usize>| -> Vec<ComputedRow> {
+        batch
             .into_par_iter()
             .map_init(
-                || ItemBuffer::new(&hc),
+                || pool.take(),
                 |buffers, i| {
+                    let buffers = buffers.get();
                     let mut row = Vec::new();
                     let mut row_stats = SpecularStats::default();
                     let mut plain = 0;
@@ -333,27 +331,77 @@ fn compute_rows(
                     (row, plain, row_stats)
                 },
             )
-            .collect();
-        for (row, plain, row_stats) in rows {
-            stats += row_stats;
-            for (k, (c, v)) in row.into_iter().enumerate() {
-                if k == plain {
-                    ff.plain_end.push(ff.column.len());
-                }
-                if v != 0.0 {
-                    ff.column.push(c);
-                    ff.value.push(v);
-                }
-            }
-            if ff.plain_end.len() < ff.row_start.len() {
-                ff.plain_end.push(ff.column.len());
-            }
-            ff.row_start.push(ff.column.len());
-        }
+            .collect()
+    };
+    // Batch k + 1 is computed while batch k is appended (serially, on one thread), so that no core
+    // waits for the append.
+    let mut pending = Vec::new();
+    for batch_start in (0..n).step_by(BATCH_ROWS) {
+        let batch = batch_start..(batch_start + BATCH_ROWS).min(n);
+        let (rows, ()) = rayon::join(|| compute_batch(batch), || append_rows(&mut ff, &mut stats, pending));
+        pending = rows;
     }
+    append_rows(&mut ff, &mut stats, pending);
     ff.column.shrink_to_fit();
     ff.value.shrink_to_fit();
     (ff, stats)
+}
+
+/// Appends computed rows to the matrix (dropping zeros) and adds up their ray statistics.
+fn append_rows(ff: &mut FormFactors, stats: &mut SpecularStats, rows: Vec<ComputedRow>) {
+    let entries: usize = rows.iter().map(|(row, _, _)| row.len()).sum();
+    ff.column.reserve(entries);
+    ff.value.reserve(entries);
+    for (row, plain, row_stats) in rows {
+        *stats += row_stats;
+        for (k, (c, v)) in row.into_iter().enumerate() {
+            if k == plain {
+                ff.plain_end.push(ff.column.len());
+            }
+            if v != 0.0 {
+                ff.column.push(c);
+                ff.value.push(v);
+            }
+        }
+        if ff.plain_end.len() < ff.row_start.len() {
+            ff.plain_end.push(ff.column.len());
+        }
+        ff.row_start.push(ff.column.len());
+    }
+}
+
+/// Item buffers kept across rayon jobs and batches: a job borrows one (`take`) and gives it back when
+/// done, so the 3N² pixel buffers are allocated (and page-faulted in) once per thread, not per job.
+struct BufferPool<'a> {
+    hc: &'a Hemicube,
+    free: Mutex<Vec<ItemBuffer>>,
+}
+
+impl BufferPool<'_> {
+    fn take(&self) -> PooledBuffer<'_> {
+        let buffer = self.free.lock().ok().and_then(|mut free| free.pop());
+        PooledBuffer { buffer: Some(buffer.unwrap_or_else(|| ItemBuffer::new(self.hc))), free: &self.free }
+    }
+}
+
+/// An item buffer on loan from a `BufferPool`; returned to it on drop.
+struct PooledBuffer<'a> {
+    buffer: Option<ItemBuffer>,
+    free: &'a Mutex<Vec<ItemBuffer>>,
+}
+
+impl PooledBuffer<'_> {
+    fn get(&mut self) -> &mut ItemBuffer {
+        self.buffer.as_mut().expect("present until drop")
+    }
+}
+
+impl Drop for PooledBuffer<'_> {
+    fn drop(&mut self) {
+        if let (Some(buffer), Ok(mut free)) = (self.buffer.take(), self.free.lock()) {
+            free.push(buffer);
+        }
+    }
 }
 
 /// A rough prediction of `compute`'s cost, for `radray info`.
@@ -375,10 +423,10 @@ pub struct FormFactorEstimate {
 /// Model (fitted on the Cornell box at 5k and 10k elements, N = 32 and 256, release build on this
 /// project's 2-core machine): each row stores about min(n/2, N²/8) entries (an interior element sees
 /// roughly half of the others, and a hemicube resolves at most a fraction of its 3N² pixels into
-/// distinct items); a hemicube costs ≈ (125 + 1.1·N) ns per element considered (set-up plus one span
-/// per covered row) plus ≈ 2.5 ns per hemicube pixel (clear, depth test, accumulate), as measured
-/// (CPU time per hemicube) after the face-by-face drawing, the narrow-polygon fast path and the
-/// branch-free accumulation. A rough guide (±50 %), not a bound.
+/// distinct items); a hemicube costs ≈ (93 + 0.81·N) ns per element considered (set-up plus one span
+/// per covered row) plus ≈ 1.85 ns per hemicube pixel (clear, depth test, accumulate): the earlier fit
+/// scaled by the measured 0.74 of CPU time at 10k elements, N = 256, after per-vertex transforms and
+/// run-length accumulation (39.5 → 29.4 user-s). A rough guide (±50 %), not a bound.
 pub fn estimate(mesh: &Mesh, params: &RadiosityParams) -> FormFactorEstimate {
     let n = mesh.elements.len();
     let rows = (0..n).filter(|&i| needs_row(mesh, i)).count();
@@ -387,7 +435,7 @@ pub fn estimate(mesh: &Mesh, params: &RadiosityParams) -> FormFactorEstimate {
     let nnz = (rows as f64 * per_row) as u64;
     let matrix_bytes = nnz * 8 + (n as u64 + 1) * std::mem::size_of::<usize>() as u64;
     let threads = rayon::current_num_threads().max(1);
-    let per_hemicube_s = (125e-9 + 1.1e-9 * res) * n as f64 + 2.5e-9 * 3.0 * res * res;
+    let per_hemicube_s = (93e-9 + 0.81e-9 * res) * n as f64 + 1.85e-9 * 3.0 * res * res;
     let seconds = rows as f64 * per_hemicube_s / threads as f64;
     FormFactorEstimate { rows, nnz, matrix_bytes, seconds, threads }
 }

@@ -10,8 +10,8 @@ use glam::Vec3;
 /// Fixed-point subpixel precision of the rasteriser: vertices snap to 1/256 pixel.
 const SUBPIXEL_BITS: u32 = 8;
 const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
-/// Partial sums per item in `ItemBuffer::finish` (divides 3N² for every even N).
-const ACC_LANES: usize = 4;
+/// The key of an empty pixel in `accumulate_row` (`mesh::NONE`: never an item).
+const EMPTY: u32 = u32::MAX;
 /// Guard band: polygons are clipped to |u|, |v| ≤ GUARD·w in face coordinates (the face is |u| ≤ w),
 /// so projected coordinates stay small and the integer edge functions exact.
 const GUARD: f32 = 2.0;
@@ -26,6 +26,9 @@ pub struct Hemicube {
     resolution_px: usize,
     /// ΔF of every pixel of the five faces, in buffer order (top face, then +x, −x, +y, −y).
     delta: Vec<f32>,
+    /// Per buffer row (N pixels), the running sums Σ ΔF from the row's first pixel through each pixel,
+    /// in f64: a run of pixels i..=k of one row sums to prefix[k] − prefix[i − 1] (`accumulate_row`).
+    delta_row_prefix: Vec<f64>,
 }
 
 impl Hemicube {
@@ -57,7 +60,15 @@ impl Hemicube {
                 }
             }
         }
-        Hemicube { resolution_px: n, delta }
+        let mut delta_row_prefix = Vec::with_capacity(delta.len());
+        for row in delta.chunks_exact(n) {
+            let mut sum = 0f64;
+            for &d in row {
+                sum += d as f64;
+                delta_row_prefix.push(sum);
+            }
+        }
+        Hemicube { resolution_px: n, delta, delta_row_prefix }
     }
 
     /// N: pixels across the top face.
@@ -143,15 +154,17 @@ fn to_face(f: usize, p: Vec3) -> [f32; 3] {
 }
 
 /// Per-thread working memory of the rasteriser: the item buffer (item id and inverse depth 1/w per
-/// pixel of the five faces) and a dense accumulator of form factors per item.
+/// pixel of the five faces) and a dense accumulator of form factors per item. Items are below
+/// `mesh::NONE` (u32::MAX).
 #[derive(Clone, Debug)]
 pub struct ItemBuffer {
     /// 1/w of the nearest surface seen through each pixel (w: distance along the face axis); 0 = empty.
     inverse_depth: Vec<f32>,
     item: Vec<u32>,
-    /// Σ ΔF per item for the current hemicube as `ACC_LANES` partial sums (item j at
-    /// j·ACC_LANES..), plus one spare item for empty pixels; zero between hemicubes.
+    /// Σ ΔF per item for the current hemicube; zero between hemicubes.
     accumulator: Vec<f64>,
+    /// One buffer row's pixel keys (item, or `EMPTY`) plus a sentinel: scratch for `accumulate_row`.
+    row_keys: Vec<u32>,
     /// Items that passed culling in the current hemicube, in the order they were added.
     touched: Vec<u32>,
     /// Polygons queued by `add_polygon` since `begin`, not yet scan-converted.
@@ -161,6 +174,14 @@ pub struct ItemBuffer {
     /// Per face, the indices into `queued` of the polygons that may cover it, in queueing order.
     face_queue: [Vec<u32>; 5],
     frame: HemicubeFrame,
+    /// Per-vertex cache for `add_indexed_polygon`: a mesh vertex shared by several polygons is
+    /// transformed to the local frame and outcoded once per hemicube, the first time a polygon uses it.
+    /// Entry v is valid when `vertex_stamp[v] == generation`.
+    vertex_local: Vec<Vec3>,
+    vertex_code: Vec<u32>,
+    vertex_stamp: Vec<u32>,
+    /// Counts hemicubes (`begin` calls); never 0, so a zeroed stamp is never current.
+    generation: u32,
     /// Polygons that passed culling (and were scan-converted) since creation: for benchmarks.
     pub polygons_rasterised: u64,
 }
@@ -171,11 +192,16 @@ impl ItemBuffer {
             inverse_depth: vec![0.0; hc.pixel_count()],
             item: vec![0; hc.pixel_count()],
             accumulator: Vec::new(),
+            row_keys: vec![0; hc.resolution_px + 1],
             touched: Vec::new(),
             queued: Vec::new(),
             queued_corners: Vec::new(),
             face_queue: Default::default(),
             frame: HemicubeFrame::new(Vec3::ZERO, Vec3::Z, 0.0),
+            vertex_local: Vec::new(),
+            vertex_code: Vec::new(),
+            vertex_stamp: Vec::new(),
+            generation: 1,
             polygons_rasterised: 0,
         }
     }
@@ -189,6 +215,11 @@ impl ItemBuffer {
         self.touched.clear();
         self.clear_queue();
         self.frame = frame;
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.vertex_stamp.fill(0);
+            self.generation = 1;
+        }
     }
 
     /// The current frame.
@@ -235,25 +266,75 @@ impl ItemBuffer {
             return;
         }
         let mut local = [Vec3::ZERO; MAX_INPUT_CORNERS];
-        let mut above = false;
+        let mut code = !0;
         for (l, &c) in local.iter_mut().zip(corners) {
             *l = frame.local(c);
-            above |= l.z > 0.0;
+            code &= outcode(*l);
         }
-        if !above {
+        self.queue_polygon(item, &local[..corners.len()], code, normal, plane_offset);
+    }
+
+    /// `add_polygon` for a polygon given by indices into a vertex array (a mesh's `positions`, the
+    /// same slice for every call of one hemicube): each vertex is transformed and outcoded once per
+    /// hemicube however many polygons share it. Same culling, same pixels, same result.
+    pub fn add_indexed_polygon(
+        &mut self,
+        hc: &Hemicube,
+        item: u32,
+        positions: &[Vec3],
+        indices: &[u32],
+        normal: Vec3,
+        centre: Vec3,
+    ) {
+        if indices.len() < 3 {
+            return;
+        }
+        if indices.len() > MAX_INPUT_CORNERS {
+            let corners: Vec<Vec3> = indices.iter().map(|&v| positions[v as usize]).collect();
+            self.add_polygon(hc, item, &corners, normal, centre);
+            return;
+        }
+        debug_assert_eq!(self.inverse_depth.len(), hc.pixel_count(), "begin() was called with another hemicube");
+        let plane_offset = (centre - self.frame.eye).dot(normal);
+        if plane_offset.is_nan() || plane_offset >= 0.0 {
+            return; // back-facing, edge-on or NaN
+        }
+        if self.vertex_stamp.len() < positions.len() {
+            self.vertex_local.resize(positions.len(), Vec3::ZERO);
+            self.vertex_code.resize(positions.len(), 0);
+            self.vertex_stamp.resize(positions.len(), 0);
+        }
+        let mut local = [Vec3::ZERO; MAX_INPUT_CORNERS];
+        let mut code = !0;
+        for (l, &v) in local.iter_mut().zip(indices) {
+            let v = v as usize;
+            if self.vertex_stamp[v] != self.generation {
+                let p = self.frame.local(positions[v]);
+                self.vertex_local[v] = p;
+                self.vertex_code[v] = outcode(p);
+                self.vertex_stamp[v] = self.generation;
+            }
+            *l = self.vertex_local[v];
+            code &= self.vertex_code[v];
+        }
+        self.queue_polygon(item, &local[..indices.len()], code, normal, plane_offset);
+    }
+
+    /// Queues a front-facing polygon (local corners, `code` the AND of their outcodes) for the faces
+    /// it may cover, unless it lies entirely behind the base plane.
+    fn queue_polygon(&mut self, item: u32, local: &[Vec3], code: u32, normal: Vec3, plane_offset: f32) {
+        if code & BEHIND_BASE != 0 {
             return; // entirely behind the base plane
         }
-        let local = &local[..corners.len()];
-        let plane_normal = frame.local_dir(normal);
-        // Items 0..=item plus the spare slot for empty pixels, ACC_LANES partial sums each.
-        if (item as usize + 2) * ACC_LANES > self.accumulator.len() {
-            self.accumulator.resize((item as usize + 2) * ACC_LANES, 0.0);
+        let plane_normal = self.frame.local_dir(normal);
+        if item as usize >= self.accumulator.len() {
+            self.accumulator.resize(item as usize + 1, 0.0);
         }
         if self.touched.last() != Some(&item) {
             self.touched.push(item);
         }
         self.polygons_rasterised += 1;
-        let mask = face_mask(local);
+        let mask = faces_of_code(code);
         let index = self.queued.len() as u32;
         for (f, queue) in self.face_queue.iter_mut().enumerate() {
             if mask & (1 << f) != 0 {
@@ -358,29 +439,59 @@ impl ItemBuffer {
     /// the accumulator.
     pub fn finish(&mut self, hc: &Hemicube, mut emit: impl FnMut(u32, f64)) {
         self.rasterise_queued(hc);
-        // Branch-free: ACC_LANES interleaved partial sums per item (pixel p adds to lane p mod
-        // ACC_LANES), so that runs of one item do not chain every add through the same memory slot and
-        // run boundaries cost no mispredictions. Empty pixels add to a spare slot past the items.
-        if self.accumulator.is_empty() {
-            self.accumulator.resize(ACC_LANES, 0.0); // nothing added: only the spare slot
+        let n = hc.resolution_px;
+        self.row_keys.resize(n + 1, 0);
+        let rows = self.inverse_depth.chunks_exact(n).zip(self.item.chunks_exact(n));
+        for ((inverse_depth, items), prefix) in rows.zip(hc.delta_row_prefix.chunks_exact(n)) {
+            accumulate_row(inverse_depth, items, prefix, &mut self.row_keys, &mut self.accumulator);
         }
-        let empty = self.accumulator.len() / ACC_LANES - 1;
-        let acc = &mut self.accumulator;
-        let pixels = self.inverse_depth.chunks_exact(ACC_LANES).zip(self.item.chunks_exact(ACC_LANES));
-        for ((z, id), df) in pixels.zip(hc.delta.chunks_exact(ACC_LANES)) {
-            for lane in 0..ACC_LANES {
-                let slot = if z[lane] > 0.0 { id[lane] as usize } else { empty };
-                acc[slot * ACC_LANES + lane] += df[lane] as f64;
-            }
-        }
-        acc[empty * ACC_LANES..].fill(0.0);
         for &j in &self.touched {
-            let lanes = &mut acc[j as usize * ACC_LANES..(j as usize + 1) * ACC_LANES];
-            let f: f64 = lanes.iter().sum();
-            lanes.fill(0.0);
+            let f = std::mem::take(&mut self.accumulator[j as usize]);
             if f > 0.0 {
                 emit(j, f);
             }
+        }
+    }
+}
+
+/// Adds one buffer row's ΔF to the items it shows: F_j += Σ ΔF over the row's pixels that show j.
+///
+/// The row is cut into runs of pixels with the same key (item, or `EMPTY` where 1/w = 0); a run i..=k
+/// adds prefix[k] − prefix[i − 1] (`delta_row_prefix`), so the cost is one read-modify-write per run
+/// instead of per pixel, and run ends are found 64 pixels at a time as a bit mask. Every ΔF is an f32
+/// multiple of the smallest one's ulp, with max/min ΔF ≈ 4N, so any sum of them needs at most
+/// 24 + log₂ 4N + log₂ 3N² bits: up to N = 256 every prefix, run and total is exact in f64 (53 bits)
+/// and the result does not depend on how the sum is split; above, only the rounding order differs.
+/// `keys` has room for the row plus one.
+fn accumulate_row(inverse_depth: &[f32], items: &[u32], prefix: &[f64], keys: &mut [u32], accumulator: &mut [f64]) {
+    let width = inverse_depth.len();
+    for ((key, &z), &id) in keys.iter_mut().zip(inverse_depth).zip(items) {
+        *key = if z > 0.0 { id } else { EMPTY };
+    }
+    keys[width] = !keys[width - 1]; // the row's last pixel always ends a run
+    let mut before = 0f64; // prefix through the end of the previous run
+    for base in (0..width).step_by(64) {
+        let len = (width - base).min(64);
+        // Run ends as bytes (vectorises), then packed eight at a time: with bytes b_i ∈ {0, 1},
+        // x·0x0102040810204080 has b_i at bit 56 + i and no carries into those bits.
+        let mut end_bytes = [0u8; 64];
+        let (this, next) = (&keys[base..base + len], &keys[base + 1..base + len + 1]);
+        for ((e, &a), &b) in end_bytes.iter_mut().zip(this).zip(next) {
+            *e = (a != b) as u8;
+        }
+        let mut ends = 0u64;
+        for (g, bytes) in end_bytes.chunks_exact(8).enumerate() {
+            let x = u64::from_le_bytes(bytes.try_into().expect("8 bytes"));
+            ends |= (x.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * g);
+        }
+        while ends != 0 {
+            let end = base + ends.trailing_zeros() as usize;
+            ends &= ends - 1;
+            let through = prefix[end];
+            if keys[end] != EMPTY {
+                accumulator[keys[end] as usize] += through - before;
+            }
+            before = through;
         }
     }
 }
@@ -400,22 +511,37 @@ struct QueuedPolygon {
 /// each face, the hull is rejected when every point lies outside one of its frustum planes (|u| ≤ w,
 /// v ≤ w, and v ≥ −w on top or v ≥ 0 on a side) or behind it (w ≤ 0).
 fn face_mask(local: &[Vec3]) -> u8 {
-    // out[f] collects, per face, "all points outside plane k" as bits k = 0..5.
-    let mut out = [0x1fu8; 5];
-    for &Vec3 { x, y, z } in local {
-        let below = z < 0.0;
-        let bits = |u: f32, v: f32, w: f32, v_low: bool| -> u8 {
-            (u < -w) as u8 | ((u > w) as u8) << 1 | ((v > w) as u8) << 2 | (v_low as u8) << 3 | ((w <= 0.0) as u8) << 4
-        };
-        out[0] &= bits(x, y, z, y < -z);
-        out[1] &= bits(y, z, x, below);
-        out[2] &= bits(y, z, -x, below);
-        out[3] &= bits(x, z, y, below);
-        out[4] &= bits(x, z, -y, below);
-    }
+    faces_of_code(local.iter().fold(!0, |code, &p| code & outcode(p)))
+}
+
+/// Outcode bit of `outcode`: the point lies on or behind the hemicube's base plane (z ≤ 0, or NaN).
+const BEHIND_BASE: u32 = 1 << 25;
+
+/// Outcode of a local point: bit 5f + k set when it lies outside frustum plane k of face f (the planes
+/// of `face_mask`), and `BEHIND_BASE`. The AND of a polygon's corner outcodes has a plane's bit set
+/// exactly when every corner lies outside that plane (Cohen–Sutherland style trivial rejection).
+#[inline]
+fn outcode(p: Vec3) -> u32 {
+    let Vec3 { x, y, z } = p;
+    let below = z < 0.0;
+    let bits = |u: f32, v: f32, w: f32, v_low: bool| -> u32 {
+        (u < -w) as u32 | ((u > w) as u32) << 1 | ((v > w) as u32) << 2 | (v_low as u32) << 3 | ((w <= 0.0) as u32) << 4
+    };
+    bits(x, y, z, y < -z)
+        | bits(y, z, x, below) << 5
+        | bits(y, z, -x, below) << 10
+        | bits(x, z, y, below) << 15
+        | bits(x, z, -y, below) << 20
+        | ((z > 0.0) as u32 ^ 1) << 25
+}
+
+/// The faces (bit f) that a polygon with combined outcode `code` may cover: those with no plane
+/// that all its corners lie outside.
+#[inline]
+fn faces_of_code(code: u32) -> u8 {
     let mut mask = 0;
-    for (f, &o) in out.iter().enumerate() {
-        if o == 0 {
+    for f in 0..5 {
+        if (code >> (5 * f)) & 0x1f == 0 {
             mask |= 1 << f;
         }
     }
@@ -592,9 +718,11 @@ fn rasterise_convex(
         for (k, (z, id)) in depth.iter_mut().zip(ids.iter_mut()).enumerate() {
             // i32 → f32 is exact here (i < 2²⁴) and, unlike usize → f32, a single instruction.
             let candidate = row_depth + pa * (lo as i32 + k as i32) as f32;
-            // Branch-free so that it vectorises: max for the depth, a bit mask for the id.
-            let mask = ((candidate > *z) as u32).wrapping_neg();
-            *z = z.max(candidate);
+            // Branch-free so that it vectorises: a select for the depth (not f32::max, whose NaN rule
+            // costs instructions; the stored depth is never NaN), a bit mask for the id.
+            let wins = candidate > *z;
+            let mask = (wins as u32).wrapping_neg();
+            *z = if wins { candidate } else { *z };
             *id = (*id & !mask) | (item & mask);
         }
     }
