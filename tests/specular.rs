@@ -204,8 +204,8 @@ fn box_scene(mirror_floor: bool) -> SceneDescription {
 /// (the floor is the only mirror and the reflected ray goes up) onto a diffuse wall (at N = 64 every
 /// specular pixel is its own block), so each diffuse
 /// row sums to Σ_diffuse F + Ks·F_mirror with F_mirror the dropped plain share of the mirror: at most
-/// Σ ΔF ≤ 1 + 1/N² (mirrors with Ks ≤ 1 create no energy), and at least that figure less 1 % of the
-/// mirrored share.
+/// Σ ΔF ≤ 1 + 1/N² (mirrors with Ks ≤ 1 create no energy), and at least that figure less 0.5 % of
+/// the mirrored share.
 #[test]
 fn mirror_box_rows_sum_to_at_most_one() {
     let s = box_scene(true);
@@ -214,7 +214,7 @@ fn mirror_box_rows_sum_to_at_most_one() {
     let plain = compute(&mesh, &params(n), &|| {});
     let ff = extended(&s, &mesh, n);
     let mirror: Vec<bool> = (0..mesh.elements.len()).map(|j| mesh.elements.material[j] == MIRROR).collect();
-    let mut rows = 0;
+    let (mut rows, mut worst_deficit) = (0, 0.0f64);
     for i in 0..mesh.elements.len() {
         if mirror[i] {
             assert_eq!(ff.row(i).0.len(), 0, "a pure mirror needs no row");
@@ -232,16 +232,17 @@ fn mirror_box_rows_sum_to_at_most_one() {
         let sum = ff.row_sum(i);
         assert!(sum <= 1.0 + 1.0 / (n * n) as f64 + 1e-5, "row {i}: Σ(F + Fˢ) = {sum}");
         let expected = diffuse + KS as f64 * mirrored;
-        // Lower bound: the mirror returns Ks of its share, less 1 % of that share. Observed deficits
-        // are ≤ 0.6 % of the mirrored share at N = 64 (up to 1.9e-3 absolute). Their cause: of the
-        // 196 583 mirror paths, 205 reflected rays (and 165 first rays) find no hit in this closed
-        // box, because the accelerator's BVH misses walls hit exactly on an edge shared by two
-        // elements (see `bvh_hits_a_wall_exactly_on_a_shared_element_edge`).
-        assert!(sum >= expected - 0.01 * mirrored, "row {i}: Σ(F + Fˢ) = {sum} vs {expected}");
+        // Lower bound: the mirror returns Ks of its share, less 0.5 % of that share. Deficits were up to
+        // 0.6 % while the accelerator's BVH missed walls hit exactly on an edge shared by two elements
+        // (see `bvh_hits_a_wall_exactly_on_a_shared_element_edge`); with padded BVH boxes the worst is
+        // 0.21 % at N = 64, from paths not yet accounted for (open: rays through the box's corners?).
+        assert!(sum >= expected - 0.005 * mirrored, "row {i}: Σ(F + Fˢ) = {sum} vs {expected}");
         if mirrored > 0.0 {
             rows += 1;
+            worst_deficit = worst_deficit.max((expected - sum) / mirrored);
         }
     }
+    println!("{rows} rows see the mirror; worst deficit {:.3e} of the mirrored share", worst_deficit);
     assert!(rows > 50, "only {rows} rows see the mirror");
 }
 
@@ -272,10 +273,11 @@ fn diffuse_scenes_keep_plain_form_factors_bit_for_bit() {
 /// The same mirror scene with a 1 m × 1 m receiver, its entry to the emitter taken from light traced
 /// from the emitter (`SpecularPaths::with_light_paths`): Fˢ = Ks × the area-averaged form factor to the
 /// mirror image, the average by the midpoint rule over 20 × 20 points of Lambert's closed form (error
-/// < 0.1 %: F varies by ~10 % across the receiver, smoothly). Tolerance 5 %: about 3 standard errors
-/// of the photon estimate (1/√k with k ≈ 4000 photons landing on the receiver, from 2¹⁹ photons sent
-/// uniformly over the sphere of directions, since the emitter lies inside the mirror's bounding sphere),
-/// far below the 20 % (1 − Ks) a missing mirror factor would make.
+/// < 0.1 %: F varies by ~10 % across the receiver, smoothly). Tolerance 5 %: the photon estimate's
+/// standard error is 1/√k with k ≈ 1000 photons landing on the receiver (from `PHOTONS_PER_OBJECT` =
+/// 2¹⁷ sent uniformly over the sphere of directions, since the emitter lies inside the mirror's bounding
+/// sphere), about 3 %; the seed is fixed, so the result is deterministic (+1.7 % measured). 5 % is far
+/// below the 20 % (1 − Ks) a missing mirror factor would make.
 #[test]
 fn light_paths_give_the_mirror_images_form_factor() {
     let emitter = horizontal(1.5, (1.0, 2.0), (-0.5, 0.5), false);
@@ -302,6 +304,7 @@ fn light_paths_give_the_mirror_images_form_factor() {
     }
     let expected = KS as f64 * average;
     let got = sum_of(ff.row_extended(0), 2);
+    println!("Fˢ = {got} vs Ks·F̄ = {expected}: {:+.2}%", 100.0 * (got / expected - 1.0));
     assert!((got / expected - 1.0).abs() <= 0.05, "Fˢ = {got} vs Ks·F̄ = {expected}");
 }
 
@@ -310,10 +313,9 @@ fn light_paths_give_the_mirror_images_form_factor() {
 /// triangle (0.25,0,0), (0.5,0,0), (0.5,0.25,0) at t ≈ 0.1514, but obvhs' compressed-BVH node test is
 /// not conservative (slab test without the 1 + 2γ widening of Ize 2013): for a flat node (zero extent
 /// in z) entered exactly on its x boundary t_min and t_max are equal up to rounding, and both
-/// neighbouring nodes are culled. A fix belongs in `accel` (e.g. widen node boxes or build from padded
-/// boxes); it is the "lost mirror paths" deficit of `mirror_box_rows_sum_to_at_most_one`.
+/// neighbouring nodes are culled. `accel` now builds the BVH from boxes widened by a few ulps
+/// (`BOX_PADDING`); this ray was the "lost mirror paths" deficit of `mirror_box_rows_sum_to_at_most_one`.
 #[test]
-#[ignore = "open: accel's BVH misses hits on shared edges of axis-aligned walls (obvhs node test not conservative)"]
 fn bvh_hits_a_wall_exactly_on_a_shared_element_edge() {
     let s = box_scene(true);
     let mesh = Mesh::build(&s, 0.25 * 1.0001);
