@@ -250,7 +250,7 @@ def render_and_measure(setting: Setting, mode: str, tmp: Path, reference: Path) 
     stats_file = tmp / f"{setting.name}.{mode}.json"
     mode_args = ["--mode", "final", "--direct", "pixel"] if mode == "final" else ["--mode", "radiosity"]
     r, stats = timed("render", scene, "-o", out, *mode_args, *setting.args(), "--stats", stats_file, stats_file=stats_file)
-    info = json.loads(radray("info", scene, "--json", *setting.args()).stdout)
+    info = json.loads(radray("info", scene, "--json", *setting.args()[:2]).stdout)  # info has no --spp
     described = tomllib.loads(scene.read_text())
     spp = setting.spp or described["image"].get("samples_per_pixel", 16)
     ls = setting.light_samples or described.get("render", {}).get("light_samples", 4)
