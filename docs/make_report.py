@@ -711,7 +711,7 @@ def preset_cells(results: list[Measured]) -> dict[str, str]:
         if final and rad:
             cells[preset] = (
                 f"{final.elements:,} elements; final {final.run.wall_s:.1f} s wall ({final.run.cpu_s:.1f} CPU-s), "
-                f"{final.run.peak_rss_mib:.0f} MB peak; relMSE final {final.metrics['relMSE']:.5f}, "
+                f"{final.run.peak_rss_mib:.0f} MiB peak; relMSE final {final.metrics['relMSE']:.5f}, "
                 f"radiosity {rad.metrics['relMSE']:.5f}"
             )
     return cells
