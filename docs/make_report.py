@@ -633,8 +633,9 @@ def scaling(tmp: Path) -> tuple[str, dict]:
         f"{rows[-1]['nnz'] / rows[-1]['elements']:.0f} on average ({rows[-1]['nnz'] / rows[-1]['elements'] / (3 * hemicube**2):.0%} "
         "of that cap), so the matrix is still close to its quadratic regime and would turn linear only "
         "when the rows saturate. Peak RSS follows the matrix once it outweighs the rest of the process. "
-        f"`radray info`'s memory estimate is {rows[-1]['ff_mib'] / rows[-1]['predicted_mib']:.1f}× below the "
-        f"measured matrix at {rows[-1]['elements']} elements and {hemicube}².\n\n"
+        f"`radray info` predicted {rows[-1]['predicted_mib']:.0f} MiB for the measured "
+        f"{rows[-1]['ff_mib']:.0f} MiB matrix at {rows[-1]['elements']} elements and {hemicube}² "
+        f"({rows[-1]['predicted_mib'] / rows[-1]['ff_mib'] - 1:+.0%}).\n\n"
         f"![scaling]({rel(IMAGES / 'report_scaling.png')})"
     )
     return text, fits

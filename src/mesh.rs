@@ -267,6 +267,19 @@ impl Mesh {
         }
     }
 
+    /// The element on the side of triangle `t` that a ray or a light direction meets: the triangle's
+    /// own element when `front` (the direction is on the side its normal points to), the back element
+    /// of a two-sided surface otherwise, `None` behind a one-sided surface.
+    pub fn side_element(&self, t: usize, front: bool) -> Option<usize> {
+        if front {
+            Some(self.triangle_element[t] as usize)
+        } else if self.triangle_back_element[t] != NONE {
+            Some(self.triangle_back_element[t] as usize)
+        } else {
+            None
+        }
+    }
+
     /// Per-vertex values from per-element values: the area-weighted mean over the elements that share
     /// the vertex (vertices are shared only within one surface side, so values never bleed across
     /// surfaces). This is Gouraud's vertex interpolation of a radiosity solution.

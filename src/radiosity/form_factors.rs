@@ -421,9 +421,10 @@ pub struct FormFactorEstimate {
 /// Predicts the matrix size and the time of `compute` from element count and hemicube resolution.
 ///
 /// Model (fitted on the Cornell box at 5k and 10k elements, N = 32 and 256, release build on this
-/// project's 2-core machine): each row stores about min(n/2, N²/8) entries (an interior element sees
-/// roughly half of the others, and a hemicube resolves at most a fraction of its 3N² pixels into
-/// distinct items); a hemicube costs ≈ (93 + 0.81·N) ns per element considered (set-up plus one span
+/// project's 2-core machine): each row stores about min(n/2, 0.85·N²) entries (an interior element
+/// sees roughly half of the others, and a hemicube resolves at most a fraction of its 3N² pixels into
+/// distinct items: 28% at 40k elements and N = 128, where rows held 13.5k entries, docs/performance.md);
+/// a hemicube costs ≈ (93 + 0.81·N) ns per element considered (set-up plus one span
 /// per covered row) plus ≈ 1.85 ns per hemicube pixel (clear, depth test, accumulate): the earlier fit
 /// scaled by the measured 0.74 of CPU time at 10k elements, N = 256, after per-vertex transforms and
 /// run-length accumulation (39.5 → 29.4 user-s). A rough guide (±50 %), not a bound.
@@ -431,7 +432,7 @@ pub fn estimate(mesh: &Mesh, params: &RadiosityParams) -> FormFactorEstimate {
     let n = mesh.elements.len();
     let rows = (0..n).filter(|&i| needs_row(mesh, i)).count();
     let res = Hemicube::new(params.hemicube_resolution_px).resolution_px() as f64;
-    let per_row = (n as f64 / 2.0).min(res * res / 8.0);
+    let per_row = (n as f64 / 2.0).min(0.85 * res * res);
     let nnz = (rows as f64 * per_row) as u64;
     let matrix_bytes = nnz * 8 + (n as u64 + 1) * std::mem::size_of::<usize>() as u64;
     let threads = rayon::current_num_threads().max(1);

@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::hemicube::{Hemicube, ItemBuffer};
 use crate::accel::Accel;
-use crate::mesh::{Mesh, NONE};
+use crate::mesh::Mesh;
 use crate::rng::Pcg32;
 use crate::scene::{Material, Surface};
 use crate::trace::caustics::{trace_photons, Landing};
@@ -210,13 +210,7 @@ impl<'a> SpecularPaths<'a> {
             let front_element = mesh.triangle_element[t] as usize;
             let normal = elements.normal[front_element];
             let front = ray.dir.dot(normal) < 0.0;
-            let side = if front {
-                Some(front_element)
-            } else if mesh.triangle_back_element[t] != NONE {
-                Some(mesh.triangle_back_element[t] as usize)
-            } else {
-                None
-            };
+            let side = mesh.side_element(t, front);
             let Some(material) = self.materials.get(elements.material[front_element] as usize) else {
                 continue;
             };

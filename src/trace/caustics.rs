@@ -182,13 +182,10 @@ pub fn trace_photons(
             // Which side of the emitter faces the direction, and its radiance.
             let front_element = mesh.triangle_element[t] as usize;
             let cos_front = e.normal[front_element].dot(dir);
-            let (element, cos_emit) = if cos_front > 0.0 {
-                (front_element, cos_front)
-            } else if mesh.triangle_back_element[t] != NONE {
-                (mesh.triangle_back_element[t] as usize, -cos_front)
-            } else {
+            let Some(element) = mesh.side_element(t, cos_front > 0.0) else {
                 continue;
             };
+            let cos_emit = cos_front.abs();
             let radiance = e.emission[element] / PI;
             if radiance.max_element() <= 0.0 {
                 continue;
@@ -359,13 +356,7 @@ fn follow(
         }
         let normal = e.normal[front_element];
         let front = dir.dot(normal) < 0.0;
-        let side = if front {
-            Some(front_element)
-        } else if mesh.triangle_back_element[t] != NONE {
-            Some(mesh.triangle_back_element[t] as usize)
-        } else {
-            None
-        };
+        let side = mesh.side_element(t, front);
         let Some(material) = materials.get(e.material[front_element] as usize) else {
             break;
         };

@@ -448,13 +448,10 @@ impl<'a> Tracer<'a> {
             }
             let front_element = mesh.triangle_element[t] as usize;
             let cos_front = -mesh.elements.normal[front_element].dot(w);
-            let (element, cos_light) = if cos_front > 0.0 {
-                (front_element, cos_front)
-            } else if mesh.triangle_back_element[t] != NONE {
-                (mesh.triangle_back_element[t] as usize, -cos_front)
-            } else {
+            let Some(element) = mesh.side_element(t, cos_front > 0.0) else {
                 continue;
             };
+            let cos_light = cos_front.abs();
             let emitted_radiance = mesh.elements.emission[element] / PI;
             if emitted_radiance.max_element() <= 0.0 || cos_light <= 0.0 {
                 continue;
