@@ -1,18 +1,17 @@
 //! Specification tests of pass two: the accelerator against brute force, the camera's conventions and
 //! the Whitted tracer on small hand-built scenes with hand-made radiosity solutions.
 
-use std::f32::consts::PI;
-use std::path::PathBuf;
+mod common;
 
-use glam::{vec3, DVec3, Vec3};
+use std::f32::consts::PI;
+
+use common::{cornell_camera, emitter, glass, mirror, scene, solution, surface, z_quad};
+use glam::{vec3, Vec3};
 use radray::accel::{intersect_triangle_f64, Accel, WatertightRay};
 use radray::mesh::Mesh;
-use radray::radiosity::solution::{Solution, SolveStats};
+use radray::radiosity::solution::Solution;
 use radray::rng::Pcg32;
-use radray::scene::{
-    Camera, DirectMode, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SolverKind,
-    SourceLoc, Surface,
-};
+use radray::scene::{Camera, DirectMode, Material, RenderParams, SceneDescription, Surface};
 use radray::trace::{PinholeCamera, RayCounts, TraceMode, Tracer};
 
 // ---------------------------------------------------------------------------------------------
@@ -30,56 +29,6 @@ fn random_unit(rng: &mut Pcg32) -> Vec3 {
         if l > 0.1 && l <= 1.0 {
             return v / l;
         }
-    }
-}
-
-fn surface(vertices: [Vec3; 4], material: u32, two_sided: bool) -> Surface {
-    Surface {
-        vertices: vertices.to_vec(),
-        material,
-        two_sided,
-        shading_normals: None,
-        object: String::new(),
-        source: SourceLoc::default(),
-    }
-}
-
-fn scene(materials: Vec<Material>, surfaces: Vec<Surface>) -> SceneDescription {
-    SceneDescription {
-        path: PathBuf::from("test.scene"),
-        camera: Camera { eye: vec3(0.0, 0.0, 5.0), look_at: Vec3::ZERO, up: Vec3::Y, vfov_deg: 40.0 },
-        image: ImageSettings::default(),
-        radiosity: RadiosityParams::default(),
-        render: RenderParams::default(),
-        materials,
-        surfaces,
-        warnings: Vec::new(),
-    }
-}
-
-fn emitter(name: &str, radiance: Vec3) -> Material {
-    Material { emitted_radiance: radiance, ..Material::diffuse(name, Vec3::ZERO) }
-}
-
-/// A hand-made solution: per-element exitance and direct part, vertex values by the mesh's
-/// area-weighted averaging.
-fn solution(mesh: &Mesh, exitance: Vec<Vec3>, direct: Vec<Vec3>) -> Solution {
-    let average = |values: &[Vec3]| -> Vec<Vec3> {
-        let wide: Vec<DVec3> = values.iter().map(|v| v.as_dvec3()).collect();
-        mesh.vertex_average(&wide).iter().map(|v| v.as_vec3()).collect()
-    };
-    Solution {
-        vertex_exitance: average(&exitance),
-        vertex_direct_exitance: average(&direct),
-        element_exitance: exitance,
-        element_direct_exitance: direct,
-        mesh_fingerprint: 0,
-        stats: SolveStats {
-            solver: SolverKind::GaussSeidel,
-            iterations: 0,
-            residual_history: Vec::new(),
-            converged: true,
-        },
     }
 }
 
@@ -240,10 +189,6 @@ fn closest_hit_respects_t_min_and_t_max() {
 // Camera
 // ---------------------------------------------------------------------------------------------
 
-fn cornell_camera() -> Camera {
-    Camera { eye: vec3(278.0, 273.0, -800.0), look_at: vec3(278.0, 273.0, 0.0), up: Vec3::Y, vfov_deg: 39.307_648 }
-}
-
 #[test]
 fn centre_of_the_film_looks_at_look_at() {
     let camera = Camera { eye: vec3(1.0, 2.0, 3.0), look_at: vec3(-2.0, 0.5, 7.0), up: Vec3::Y, vfov_deg: 50.0 };
@@ -289,16 +234,6 @@ fn vertical_field_of_view_spans_the_film_height() {
 // ---------------------------------------------------------------------------------------------
 // Whitted tracer
 // ---------------------------------------------------------------------------------------------
-
-/// Quad in the plane z = `z`, side 2·`half`, facing +z (or −z).
-fn z_quad(z: f32, half: f32, facing_plus_z: bool, material: u32, two_sided: bool) -> Surface {
-    let (a, b, c, d) = (vec3(-half, -half, z), vec3(half, -half, z), vec3(half, half, z), vec3(-half, half, z));
-    if facing_plus_z {
-        surface([a, b, c, d], material, two_sided)
-    } else {
-        surface([a, d, c, b], material, two_sided)
-    }
-}
 
 #[test]
 fn emitter_seen_directly_is_exactly_ke_in_every_mode() {
@@ -349,7 +284,7 @@ fn back_face_of_one_sided_surface_is_black_and_two_sided_shows_its_back() {
 
 #[test]
 fn mirror_shows_ks_times_the_reflected_surface() {
-    let mirror = Material { specular_reflectance: Vec3::splat(0.9), ..Material::diffuse("mirror", Vec3::ZERO) };
+    let mirror = mirror("mirror", 0.9);
     let wall = Material::diffuse("wall", Vec3::splat(0.5));
     let wall_radiance = vec3(1.0, 2.0, 3.0);
     // Mirror in z = 0 facing +z; wall in x = 3 facing −x.
@@ -375,12 +310,7 @@ fn mirror_shows_ks_times_the_reflected_surface() {
 
 #[test]
 fn glass_slab_transmits_the_multiple_reflection_series() {
-    let glass = Material {
-        specular_reflectance: Vec3::ONE,
-        ior: 1.5,
-        transmittance: 1.0,
-        ..Material::diffuse("glass", Vec3::ZERO)
-    };
+    let glass = glass("glass");
     let ke = vec3(1.0, 2.0, 4.0);
     // Slab between z = −0.1 and z = 0 (outward normals ±z), emitter at z = −1 facing the slab.
     let scene = scene(
@@ -416,12 +346,7 @@ fn glass_slab_transmits_the_multiple_reflection_series() {
 fn total_internal_reflection_keeps_light_inside_glass() {
     // A ray inside a slab hitting its face beyond the critical angle (41.8°) is reflected
     // completely: the emitter behind that face stays invisible along the refracted direction.
-    let glass = Material {
-        specular_reflectance: Vec3::ONE,
-        ior: 1.5,
-        transmittance: 1.0,
-        ..Material::diffuse("glass", Vec3::ZERO)
-    };
+    let glass = glass("glass");
     let scene = scene(
         vec![glass, emitter("light", Vec3::ONE)],
         vec![
@@ -613,7 +538,7 @@ fn shading_normals_bend_mirror_rays() {
     // A flat mirror in z = 0 whose vertex normals all lean 10° towards +x: a ray straight down
     // leaves at 20° from the vertical and reaches a wall strip (x ≥ 1 at z = 5; 5·tan 20° = 1.82)
     // that the geometric reflection (straight up, x = 0) misses.
-    let mirror = Material { specular_reflectance: Vec3::splat(0.9), ..Material::diffuse("mirror", Vec3::ZERO) };
+    let mirror = mirror("mirror", 0.9);
     let wall = Material::diffuse("wall", Vec3::splat(0.5));
     let tilt = 10f32.to_radians();
     let mut mirror_surface = z_quad(0.0, 10.0, true, 0, false);
