@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use radray::diagnose::{diagnose, GeometryReport};
-use radray::scene::{self, parse::box_faces, SceneDescription};
+use radray::scene::{self, shapes::box_faces, SceneDescription};
 use std::fmt::Write as _;
 use std::path::Path;
 
