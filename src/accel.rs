@@ -31,8 +31,8 @@ const BVH_ORIGIN_SHIFT: f32 = 1e-3;
 
 /// obvhs' node test is a plain slab test, not a conservative one (Ize 2013): a ray that enters a flat
 /// node (an axis-aligned wall's triangles have zero extent across the wall) exactly on a boundary it
-/// shares with its neighbour can be rejected by both, and the hit is lost (the mirror box of
-/// `tests/specular.rs` lost 0.6% of its mirror paths this way). Every triangle's box is therefore
+/// shares with its neighbour can be rejected by both, and the hit is lost (see docs/performance.md,
+/// "Measurements behind the code"). Every triangle's box is therefore
 /// widened by this fraction of the scene's largest coordinate magnitude (about 70 f32 ulps); the
 /// watertight triangle test still decides the hit.
 const BOX_PADDING: f32 = 1e-6 * 8.0;

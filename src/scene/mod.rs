@@ -2,6 +2,7 @@
 //! from a scene file. Nothing here builds meshes or acceleration structures (see `mesh` and `accel`).
 
 pub mod instance;
+pub mod lint;
 pub mod obj;
 pub mod parse;
 pub mod shapes;
