@@ -2,21 +2,20 @@
 //! Whitted tracer per sample, on a generated Cornell-like box (mm) holding a mirror sphere and a glass
 //! sphere, about 20k triangles. Everything is generated here; nothing is read from disk.
 
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 use std::f32::consts::PI;
 use std::hint::black_box;
-use std::path::PathBuf;
 use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use glam::{vec3, DVec3, Vec3};
+use glam::{vec3, Vec3};
 use radray::accel::Accel;
 use radray::mesh::Mesh;
-use radray::radiosity::solution::{Solution, SolveStats};
+use radray::radiosity::solution::Solution;
 use radray::rng::Pcg32;
-use radray::scene::{
-    Camera, DirectMode, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SolverKind,
-    SourceLoc, Surface,
-};
+use radray::scene::{DirectMode, RenderParams, SceneDescription, Surface};
 use radray::trace::{PinholeCamera, RayCounts, TraceMode, Tracer};
 
 const ROOM_CENTRE: Vec3 = Vec3::new(278.0, 274.0, 280.0);
@@ -33,14 +32,7 @@ fn surface(mut vertices: Vec<Vec3>, material: u32, inside_point: Option<Vec3>, o
     if flip {
         vertices.reverse();
     }
-    Surface {
-        vertices,
-        material,
-        two_sided: false,
-        shading_normals: None,
-        object: String::new(),
-        source: SourceLoc::default(),
-    }
+    common::surface(vertices, material, false)
 }
 
 /// A UV sphere of `rings` × `segments`: quads, with triangles at the poles.
@@ -66,19 +58,8 @@ fn sphere(centre: Vec3, radius: f32, rings: u32, segments: u32, material: u32, o
 }
 
 fn cornell_spheres() -> SceneDescription {
-    let materials = vec![
-        Material::diffuse("white", vec3(0.725, 0.71, 0.68)),
-        Material::diffuse("red", vec3(0.63, 0.065, 0.05)),
-        Material::diffuse("green", vec3(0.14, 0.45, 0.091)),
-        Material { emitted_radiance: vec3(17.0, 12.0, 4.0), ..Material::diffuse("light", Vec3::ZERO) },
-        Material { specular_reflectance: Vec3::splat(0.9), ..Material::diffuse("mirror", Vec3::ZERO) },
-        Material {
-            specular_reflectance: Vec3::ONE,
-            ior: 1.5,
-            transmittance: 1.0,
-            ..Material::diffuse("glass", Vec3::ZERO)
-        },
-    ];
+    let mut materials = common::cornell_materials();
+    materials.extend([common::mirror("mirror", 0.9), common::glass("glass")]);
     let q = |a: [f32; 3], b: [f32; 3], c: [f32; 3], d: [f32; 3]| vec![a.into(), b.into(), c.into(), d.into()];
     let room = Some(ROOM_CENTRE);
     let mut surfaces = vec![
@@ -91,43 +72,15 @@ fn cornell_spheres() -> SceneDescription {
     ];
     sphere(vec3(185.0, 100.0, 170.0), 100.0, 50, 100, 4, &mut surfaces);
     sphere(vec3(380.0, 100.0, 360.0), 100.0, 50, 100, 5, &mut surfaces);
-    SceneDescription {
-        path: PathBuf::from("bench.scene"),
-        camera: Camera {
-            eye: vec3(278.0, 273.0, -800.0),
-            look_at: vec3(278.0, 273.0, 0.0),
-            up: Vec3::Y,
-            vfov_deg: 39.307_648,
-        },
-        image: ImageSettings::default(),
-        radiosity: RadiosityParams::default(),
-        render: RenderParams::default(),
-        materials,
-        surfaces,
-        warnings: Vec::new(),
-    }
+    SceneDescription { camera: common::cornell_camera(), ..common::scene(materials, surfaces) }
 }
 
 /// A plausible hand-made solution: B = E + ρ·100, direct part ρ·60.
 fn fake_solution(mesh: &Mesh) -> Solution {
-    let b: Vec<DVec3> = (0..mesh.elements.len())
-        .map(|e| (mesh.elements.emission[e] + mesh.elements.reflectance[e] * 100.0).as_dvec3())
-        .collect();
-    let bd: Vec<DVec3> = mesh.elements.reflectance.iter().map(|r| (*r * 60.0).as_dvec3()).collect();
-    let to_f32 = |v: Vec<DVec3>| v.into_iter().map(|v| v.as_vec3()).collect::<Vec<Vec3>>();
-    Solution {
-        vertex_exitance: to_f32(mesh.vertex_average(&b)),
-        vertex_direct_exitance: to_f32(mesh.vertex_average(&bd)),
-        element_exitance: to_f32(b),
-        element_direct_exitance: to_f32(bd),
-        mesh_fingerprint: 0,
-        stats: SolveStats {
-            solver: SolverKind::GaussSeidel,
-            iterations: 0,
-            residual_history: Vec::new(),
-            converged: true,
-        },
-    }
+    let e = &mesh.elements;
+    let b: Vec<Vec3> = (0..e.len()).map(|i| e.emission[i] + e.reflectance[i] * 100.0).collect();
+    let bd: Vec<Vec3> = e.reflectance.iter().map(|r| *r * 60.0).collect();
+    common::solution(mesh, b, bd)
 }
 
 fn camera_rays(scene: &SceneDescription, size_px: u32) -> Vec<(Vec3, Vec3)> {

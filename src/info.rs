@@ -30,7 +30,7 @@ pub struct InfoReport {
     /// Predicted hemicube time on this machine's cores (`radiosity::form_factors::estimate`).
     pub estimated_form_factor_seconds: f64,
     pub warnings: Vec<String>,
-    pub geometry: crate::diagnose::GeometryReport,
+    pub geometry: crate::scene::lint::GeometryReport,
 }
 
 /// Polygon area by Newell's formula.
@@ -84,7 +84,7 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
         estimated_form_factor_bytes: bytes,
         estimated_form_factor_seconds: seconds,
         warnings: scene.warnings.clone(),
-        geometry: crate::diagnose::diagnose(scene),
+        geometry: crate::scene::lint::check(scene),
     }
 }
 

@@ -8,7 +8,6 @@ pub mod accel;
 pub mod batch;
 pub mod cli;
 pub mod compare;
-pub mod diagnose;
 pub mod film;
 pub mod info;
 pub mod mesh;

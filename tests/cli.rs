@@ -1,12 +1,11 @@
 //! End to end: the real `radray` binary on the shipped scenes at small sizes — outputs, manifests, exit
 //! codes and error messages.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn radray(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_radray")).args(args).output().expect("the radray binary runs")
-}
+use common::radray;
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 fn scene(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name).display().to_string()

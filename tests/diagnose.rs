@@ -3,8 +3,8 @@
 //! scenes come out with exactly the findings their data explains.
 
 use glam::Vec3;
-use radray::diagnose::{diagnose, GeometryReport};
-use radray::scene::{self, parse::box_faces, SceneDescription};
+use radray::scene::lint::{self, GeometryReport};
+use radray::scene::{self, shapes::box_faces, SceneDescription};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -57,7 +57,7 @@ fn t_junction_is_found() {
         &[(big, "big"), (square(2.0, 0.0, 3.0, 1.0, false), "low"), (square(2.0, 1.0, 3.0, 2.0, false), "high")],
         &[],
     );
-    let r = diagnose(&scene);
+    let r = lint::check(&scene);
     assert_eq!(counts(&r), [1, 0, 0, 0, 0], "{r}");
     let t = &r.t_junctions.examples[0];
     assert_eq!((t.edge_surface.index, t.edge_surface.object.as_str()), (0, "big"));
@@ -73,7 +73,7 @@ fn t_junction_is_found() {
         ],
         &[],
     );
-    let r = diagnose(&scene);
+    let r = lint::check(&scene);
     assert!(r.is_clean(), "{r}");
 }
 
@@ -81,7 +81,7 @@ fn t_junction_is_found() {
 fn block_sunk_into_floor_intersects() {
     // A 2 × 1.5 × 2 block reaching 0.5 below the floor: its four sides cross the floor.
     let scene = quads_scene(&[floor()], &[(Vec3::new(-1.0, -0.5, -1.0), Vec3::new(1.0, 1.0, 1.0))]);
-    let r = diagnose(&scene);
+    let r = lint::check(&scene);
     assert_eq!(counts(&r), [0, 0, 4, 0, 0], "{r}");
     for x in &r.intersections.examples {
         assert_eq!(x.a.object, "floor");
@@ -103,12 +103,12 @@ fn block_standing_on_floor_is_clean() {
             quads.push((face.to_vec(), "block")); // face 2 is y−, the bottom
         }
     }
-    let r = diagnose(&quads_scene(&quads, &[]));
+    let r = lint::check(&quads_scene(&quads, &[]));
     assert!(r.is_clean(), "{r}");
 
     // A closed [[box]] on the floor adds its bottom face, back to back with the floor: that is a
     // coplanar overlap (facing opposite ways) of the block's 2 × 2 footprint — and still no intersection.
-    let r = diagnose(&quads_scene(&[floor()], &[(lo, hi)]));
+    let r = lint::check(&quads_scene(&[floor()], &[(lo, hi)]));
     assert_eq!(counts(&r), [0, 1, 0, 0, 0], "{r}");
     let c = &r.coplanar_overlaps.examples[0];
     assert!(!c.same_facing);
@@ -120,7 +120,7 @@ fn coplanar_overlap_is_found_and_edge_contact_is_not() {
     let a = || (square(0.0, 0.0, 2.0, 2.0, false), "a");
     // Shifted by 1 along x: they share a 1 × 2 strip centred on (1.5, 1).
     for flipped in [false, true] {
-        let r = diagnose(&quads_scene(&[a(), (square(1.0, 0.0, 3.0, 2.0, flipped), "b")], &[]));
+        let r = lint::check(&quads_scene(&[a(), (square(1.0, 0.0, 3.0, 2.0, flipped), "b")], &[]));
         assert_eq!(r.coplanar_overlaps.count, 1, "{r}");
         assert_eq!(r.intersections.count, 0, "{r}");
         let c = &r.coplanar_overlaps.examples[0];
@@ -131,7 +131,7 @@ fn coplanar_overlap_is_found_and_edge_contact_is_not() {
     }
     // Touching along the edge x = 2, and at the corner (2, 2): no overlap, nothing else either.
     for b in [square(2.0, 0.0, 4.0, 2.0, false), square(2.0, 2.0, 4.0, 4.0, false)] {
-        let r = diagnose(&quads_scene(&[a(), (b, "b")], &[]));
+        let r = lint::check(&quads_scene(&[a(), (b, "b")], &[]));
         assert!(r.is_clean(), "{r}");
     }
 }
@@ -140,13 +140,13 @@ fn coplanar_overlap_is_found_and_edge_contact_is_not() {
 fn flipped_face_in_a_closed_box_is_found() {
     let faces = box_faces(Vec3::ZERO, Vec3::ONE, false);
     let consistent: Vec<(Vec<Vec3>, &str)> = faces.iter().map(|f| (f.to_vec(), "cube")).collect();
-    let r = diagnose(&quads_scene(&consistent, &[]));
+    let r = lint::check(&quads_scene(&consistent, &[]));
     assert!(r.is_clean(), "{r}");
 
     // Reverse the top (face 3): it traverses each of its four edges the same way as its neighbour.
     let mut flipped = consistent.clone();
     flipped[3].0.reverse();
-    let r = diagnose(&quads_scene(&flipped, &[]));
+    let r = lint::check(&quads_scene(&flipped, &[]));
     assert_eq!(counts(&r), [0, 0, 0, 1, 0], "{r}");
     assert_eq!(r.flipped.inconsistent_edges, 4);
     assert_eq!(r.flipped.examples[0].surface.index, 3);
@@ -174,7 +174,7 @@ fn shipped(name: &str) -> SceneDescription {
 #[test]
 fn shipped_cornell_box_is_clean_but_for_the_red_walls_twist() {
     for name in ["cornell_box.toml", "cornell_empty.toml"] {
-        assert_only_the_red_wall_is_twisted(&diagnose(&shipped(name)));
+        assert_only_the_red_wall_is_twisted(&lint::check(&shipped(name)));
     }
 }
 
@@ -182,7 +182,7 @@ fn shipped_cornell_box_is_clean_but_for_the_red_walls_twist() {
 fn shipped_specular_cornell_box_is_checked_from_nearby_pairs_only() {
     // 10 246 surfaces (two 5 120-triangle spheres resting on the floor at one vertex each).
     let scene = shipped("cornell_specular.toml");
-    let r = diagnose(&scene);
+    let r = lint::check(&scene);
     assert_only_the_red_wall_is_twisted(&r);
     // All pairs would be n²/2 ≈ 5·10⁷; a sphere triangle has about a dozen neighbours, so the grid
     // should examine O(n) pairs (6 n measured); 20 n leaves room and still rules out n².
@@ -191,13 +191,13 @@ fn shipped_specular_cornell_box_is_checked_from_nearby_pairs_only() {
 
 #[test]
 fn shipped_furnace_is_clean() {
-    let r = diagnose(&shipped("furnace.toml"));
+    let r = lint::check(&shipped("furnace.toml"));
     assert!(r.is_clean(), "{r}");
 }
 
 #[test]
 fn report_serialises_and_prints() {
-    let r = diagnose(&shipped("cornell_box.toml"));
+    let r = lint::check(&shipped("cornell_box.toml"));
     let json = serde_json::to_value(&r).unwrap();
     assert_eq!(json["non_planar"]["count"], 1);
     assert_eq!(json["non_planar"]["examples"][0]["surface"]["object"], "red_wall");

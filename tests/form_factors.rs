@@ -1,13 +1,14 @@
 //! Hemicube form factors against the analytic validation data in `tests/data/` (point-to-polygon,
 //! polygon-to-polygon and enclosure cases; formulas and tolerances from the validation README).
 
+mod common;
+
+use common::hemicube_params;
 use glam::Vec3;
 use radray::mesh::Mesh;
 use radray::radiosity::form_factors::{compute, FormFactors};
 use radray::radiosity::hemicube::{point_form_factors, Hemicube, ItemBuffer};
-use radray::scene::{
-    Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SourceLoc, Surface,
-};
+use radray::scene::{Material, RadiosityParams, SceneDescription};
 use serde_json::Value;
 
 fn load(name: &str) -> Value {
@@ -31,30 +32,8 @@ fn f64_matrix(v: &Value) -> Vec<Vec<f64>> {
 
 /// A scene of one-sided grey surfaces (ρ = 0.5) with nothing else set.
 fn scene(surfaces: Vec<Vec<Vec3>>) -> SceneDescription {
-    SceneDescription {
-        path: "test.obj".into(),
-        camera: Camera { eye: Vec3::ZERO, look_at: Vec3::Z, up: Vec3::Y, vfov_deg: 40.0 },
-        image: ImageSettings::default(),
-        radiosity: RadiosityParams::default(),
-        render: RenderParams::default(),
-        materials: vec![Material::diffuse("grey", Vec3::splat(0.5))],
-        surfaces: surfaces
-            .into_iter()
-            .map(|vertices| Surface {
-                vertices,
-                material: 0,
-                two_sided: false,
-                shading_normals: None,
-                object: "test".into(),
-                source: SourceLoc::default(),
-            })
-            .collect(),
-        warnings: Vec::new(),
-    }
-}
-
-fn params(resolution_px: u32) -> RadiosityParams {
-    RadiosityParams { hemicube_resolution_px: resolution_px, rotate_hemicubes: false, ..Default::default() }
+    let grey = Material::diffuse("grey", Vec3::splat(0.5));
+    common::scene(vec![grey], surfaces.into_iter().map(|vertices| common::surface(vertices, 0, false)).collect())
 }
 
 /// Area-weighted surface-to-surface form factors from element ones: F_IJ = Σ_{i∈I} A_i Σ_{j∈J} F_ij / A_I.
@@ -166,7 +145,7 @@ fn subdivided_polygons_approach_polygon_to_polygon_closed_forms() {
         }
         let shorter = (p1[1] - p1[0]).length().min((p1[3] - p1[0]).length());
         let mesh = Mesh::build(&scene(vec![p1, p2]), shorter / 4.0 * 1.0001);
-        let ff = compute(&mesh, &params(128), &|| {});
+        let ff = compute(&mesh, &hemicube_params(128), &|| {});
         let f = surface_form_factors(&mesh, &ff, 2);
         let expected = case["expected"]["F12"].as_f64().unwrap();
         let id = case["id"].as_str().unwrap();
@@ -200,7 +179,7 @@ fn closed_enclosure_rows_sum_to_one() {
         for n in [64u32, 128] {
             let (case, mesh) = enclosure(index);
             let hc = Hemicube::new(n);
-            let ff = compute(&mesh, &params(n), &|| {});
+            let ff = compute(&mesh, &hemicube_params(n), &|| {});
             assert_eq!(ff.len(), mesh.elements.len());
             let expected = f64_matrix(&case["expected_point_at_centroid"]["F"]);
             assert_eq!(expected.len(), mesh.elements.len());
@@ -229,7 +208,7 @@ fn reciprocity_holds() {
         case["geometry"]["patches"].as_array().unwrap().iter().map(|p| polygon(&p["vertices"])).collect();
     let mesh = Mesh::build(&scene(patches), 0.125 * 1.0001);
     assert_eq!(mesh.elements.len(), 6 * 64);
-    let ff = compute(&mesh, &params(64), &|| {});
+    let ff = compute(&mesh, &hemicube_params(64), &|| {});
     let f = surface_form_factors(&mesh, &ff, 6);
     let exact = f64_matrix(&case["expected"]["F"]);
     for i in 0..6 {
@@ -258,9 +237,9 @@ fn occluder_blocks_form_factor() {
         Vec3::new(1.5, -0.5, 0.5),
     ];
     let open = Mesh::build(&scene(vec![plate1.clone(), plate2.clone()]), 0.25 * 1.0001);
-    let f_open = surface_form_factors(&open, &compute(&open, &params(128), &|| {}), 2);
+    let f_open = surface_form_factors(&open, &compute(&open, &hemicube_params(128), &|| {}), 2);
     let blocked = Mesh::build(&scene(vec![plate1, plate2, occluder]), 0.25 * 1.0001);
-    let ff = compute(&blocked, &params(128), &|| {});
+    let ff = compute(&blocked, &hemicube_params(128), &|| {});
     let f = surface_form_factors(&blocked, &ff, 3);
     // Without the occluder plate 2 takes F12 ≈ 0.1998 (C-11); 3 % as in the subdivided test above.
     assert!((f_open[0][1] - 0.199824895698).abs() <= 0.03 * 0.2, "open F12 = {}", f_open[0][1]);

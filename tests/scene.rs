@@ -115,6 +115,20 @@ fn reflectance_outside_unit_interval_is_refused() {
 }
 
 #[test]
+fn material_scalars_out_of_range_name_their_key_and_line() {
+    let bad = |key: &str| format!("{CAMERA}{LIGHT_AND_QUAD}\n[[material]]\nname = \"bad\"\n{key}\n");
+    for (key, expected) in [
+        ("ns = -2", "scene.toml:17: ns (Phong exponent) must be a positive number, got -2"),
+        ("ni = 0", "scene.toml:17: ni (index of refraction) must be a positive number, got 0"),
+        ("d = 1.5", "scene.toml:17: d (dissolve) must be in [0, 1], got 1.5"),
+        ("d = nan", "scene.toml:17: d (dissolve) must be in [0, 1], got NaN"),
+    ] {
+        let msg = error_of(&bad(key));
+        assert!(msg.ends_with(expected), "{key}: {msg}");
+    }
+}
+
+#[test]
 fn energy_creating_material_is_refused() {
     let toml =
         format!("{CAMERA}{LIGHT_AND_QUAD}\n[[material]]\nname = \"bad\"\nkd = [0.6, 0.6, 0.6]\nks = [0.5, 0.5, 0.5]\n");

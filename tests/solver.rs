@@ -4,16 +4,16 @@
 // Dense elimination and per-element checks index several parallel arrays: indices read best there.
 #![allow(clippy::needless_range_loop)]
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 
 use glam::{DVec3, Vec3};
 use radray::mesh::Mesh;
 use radray::radiosity::solution::{fingerprint, SolutionFileError, FILE_MAGIC, FILE_VERSION};
 use radray::radiosity::solver::{self, Shooter};
 use radray::radiosity::{FormFactors, Solution};
-use radray::scene::{
-    Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SolverKind, SourceLoc, Surface,
-};
+use radray::scene::{Material, RadiosityParams, SceneDescription, SolverKind, Surface};
 use serde_json::Value;
 
 const ALL_SOLVERS: [SolverKind; 3] = [SolverKind::GaussSeidel, SolverKind::Jacobi, SolverKind::Progressive];
@@ -337,26 +337,10 @@ fn patch_scene(case: &Value, reflectance: &[Vec3], emission: &[Vec3]) -> SceneDe
         let mut m = Material::diffuse(&format!("patch{i}"), reflectance[i]);
         m.emitted_radiance = emission[i] / std::f32::consts::PI;
         materials.push(m);
-        let vertices = p["vertices"].as_array().unwrap().iter().map(colour).collect();
-        surfaces.push(Surface {
-            vertices,
-            material: i as u32,
-            two_sided: false,
-            shading_normals: None,
-            object: format!("patch{i}"),
-            source: SourceLoc::default(),
-        });
+        let vertices: Vec<Vec3> = p["vertices"].as_array().unwrap().iter().map(colour).collect();
+        surfaces.push(Surface { object: format!("patch{i}"), ..common::surface(vertices, i as u32, false) });
     }
-    SceneDescription {
-        path: PathBuf::from("patches.toml"),
-        camera: Camera { eye: Vec3::new(0.5, 0.5, 0.5), look_at: Vec3::ZERO, up: Vec3::Z, vfov_deg: 60.0 },
-        image: ImageSettings::default(),
-        radiosity: RadiosityParams::default(),
-        render: RenderParams::default(),
-        materials,
-        surfaces,
-        warnings: Vec::new(),
-    }
+    common::scene(materials, surfaces)
 }
 
 /// The validation cube as a scene (for its materials), its mesh and its linear system.

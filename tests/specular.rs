@@ -3,14 +3,15 @@
 //! passes the Fresnel transmittance of its two interfaces, closed boxes with mirrors create no energy,
 //! and diffuse scenes keep their plain form factors bit for bit.
 
+mod common;
+
+use common::hemicube_params;
 use glam::Vec3;
 use radray::accel::Accel;
 use radray::mesh::Mesh;
 use radray::radiosity::form_factors::{compute, compute_extended, FormFactors};
 use radray::radiosity::specular::{SpecularPaths, SPECULAR_RESOLUTION_PX};
-use radray::scene::{
-    Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SourceLoc, Surface,
-};
+use radray::scene::{Material, SceneDescription};
 use radray::trace::optics::fresnel_dielectric;
 
 const DIFFUSE: u32 = 0;
@@ -21,50 +22,22 @@ const GLASS: u32 = 3;
 const KS: f32 = 0.8;
 
 fn materials() -> Vec<Material> {
-    let mut emitter = Material::diffuse("light", Vec3::ZERO);
-    emitter.emitted_radiance = Vec3::ONE;
-    let mut mirror = Material::diffuse("mirror", Vec3::ZERO);
-    mirror.specular_reflectance = Vec3::splat(KS);
-    let mut glass = Material::diffuse("glass", Vec3::ZERO);
-    glass.specular_reflectance = Vec3::ONE;
-    glass.ior = 1.5;
-    glass.transmittance = 1.0;
-    vec![Material::diffuse("grey", Vec3::splat(0.5)), emitter, mirror, glass]
+    let grey = Material::diffuse("grey", Vec3::splat(0.5));
+    vec![grey, common::emitter("light", Vec3::ONE), common::mirror("mirror", KS), common::glass("glass")]
 }
 
 /// One-sided surfaces (corners counter-clockwise about the front) with the materials above.
 fn scene(surfaces: Vec<(Vec<Vec3>, u32)>) -> SceneDescription {
-    SceneDescription {
-        path: "test.obj".into(),
-        camera: Camera { eye: Vec3::ZERO, look_at: Vec3::Z, up: Vec3::Y, vfov_deg: 40.0 },
-        image: ImageSettings::default(),
-        radiosity: RadiosityParams::default(),
-        render: RenderParams::default(),
-        materials: materials(),
-        surfaces: surfaces
-            .into_iter()
-            .map(|(vertices, material)| Surface {
-                vertices,
-                material,
-                two_sided: false,
-                shading_normals: None,
-                object: "test".into(),
-                source: SourceLoc::default(),
-            })
-            .collect(),
-        warnings: Vec::new(),
-    }
-}
-
-fn params(resolution_px: u32) -> RadiosityParams {
-    RadiosityParams { hemicube_resolution_px: resolution_px, rotate_hemicubes: false, ..Default::default() }
+    let surfaces =
+        surfaces.into_iter().map(|(vertices, material)| common::surface(vertices, material, false)).collect();
+    common::scene(materials(), surfaces)
 }
 
 /// Plain and extended form factors of a scene's mesh.
 fn extended(scene: &SceneDescription, mesh: &Mesh, resolution_px: u32) -> FormFactors {
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let paths = SpecularPaths::new(mesh, &accel, &scene.materials);
-    compute_extended(mesh, &params(resolution_px), &paths, &|| {}).0
+    compute_extended(mesh, &hemicube_params(resolution_px), &paths, &|| {}).0
 }
 
 /// Axis-aligned rectangle at height y over [x0, x1] × [z0, z1], facing +y (`up`) or −y.
@@ -74,6 +47,21 @@ fn horizontal(y: f32, (x0, x1): (f32, f32), (z0, z1): (f32, f32), up: bool) -> V
         v.reverse();
     }
     v
+}
+
+/// A square receiver of half-width `half` at y = 1 facing down onto an 8 m mirror (y = 0, Ks = 0.8),
+/// and a 1 m² emitter at y = 1.5 beside it, also facing down: the scene, its mesh (one element per
+/// surface) and the emitter's corners.
+fn mirror_scene(half: f32) -> (SceneDescription, Mesh, Vec<Vec3>) {
+    let emitter = horizontal(1.5, (1.0, 2.0), (-0.5, 0.5), false);
+    let s = scene(vec![
+        (horizontal(1.0, (-half, half), (-half, half), false), DIFFUSE),
+        (horizontal(0.0, (-4.0, 4.0), (-4.0, 4.0), true), MIRROR),
+        (emitter.clone(), EMITTER),
+    ]);
+    let mesh = Mesh::build(&s, f32::INFINITY);
+    assert_eq!(mesh.elements.len(), 3);
+    (s, mesh, emitter)
 }
 
 /// Lambert's closed form for the form factor from a differential area at `p` with unit normal `n` to a
@@ -115,14 +103,7 @@ fn sum_of(part: (&[u32], &[f32]), j: usize) -> f64 {
 /// and ray offsets.
 #[test]
 fn plane_mirror_shows_the_emitter_image_at_ks_times_its_form_factor() {
-    let emitter = horizontal(1.5, (1.0, 2.0), (-0.5, 0.5), false);
-    let s = scene(vec![
-        (horizontal(1.0, (-0.05, 0.05), (-0.05, 0.05), false), DIFFUSE),
-        (horizontal(0.0, (-4.0, 4.0), (-4.0, 4.0), true), MIRROR),
-        (emitter.clone(), EMITTER),
-    ]);
-    let mesh = Mesh::build(&s, f32::INFINITY);
-    assert_eq!(mesh.elements.len(), 3);
+    let (s, mesh, emitter) = mirror_scene(0.05);
     for n in [128u32, 256] {
         let ff = extended(&s, &mesh, n);
         assert_eq!(sum_of(ff.row_plain(0), 2), 0.0, "no straight view of the emitter");
@@ -211,7 +192,7 @@ fn mirror_box_rows_sum_to_at_most_one() {
     let s = box_scene(true);
     let mesh = Mesh::build(&s, 0.25 * 1.0001);
     let n = 64u32;
-    let plain = compute(&mesh, &params(n), &|| {});
+    let plain = compute(&mesh, &hemicube_params(n), &|| {});
     let ff = extended(&s, &mesh, n);
     let mirror: Vec<bool> = (0..mesh.elements.len()).map(|j| mesh.elements.material[j] == MIRROR).collect();
     let (mut rows, mut worst_deficit) = (0, 0.0f64);
@@ -252,10 +233,10 @@ fn mirror_box_rows_sum_to_at_most_one() {
 fn diffuse_scenes_keep_plain_form_factors_bit_for_bit() {
     let s = box_scene(false);
     let mesh = Mesh::build(&s, 0.25 * 1.0001);
-    let plain = compute(&mesh, &params(64), &|| {});
+    let plain = compute(&mesh, &hemicube_params(64), &|| {});
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let paths = SpecularPaths::new(&mesh, &accel, &s.materials);
-    let (ff, stats) = compute_extended(&mesh, &params(64), &paths, &|| {});
+    let (ff, stats) = compute_extended(&mesh, &hemicube_params(64), &paths, &|| {});
     assert_eq!(stats.rays, 0);
     assert_eq!(ff, plain);
     for i in 0..ff.len() {
@@ -280,19 +261,12 @@ fn diffuse_scenes_keep_plain_form_factors_bit_for_bit() {
 /// below the 20 % (1 − Ks) a missing mirror factor would make.
 #[test]
 fn light_paths_give_the_mirror_images_form_factor() {
-    let emitter = horizontal(1.5, (1.0, 2.0), (-0.5, 0.5), false);
-    let s = scene(vec![
-        (horizontal(1.0, (-0.5, 0.5), (-0.5, 0.5), false), DIFFUSE),
-        (horizontal(0.0, (-4.0, 4.0), (-4.0, 4.0), true), MIRROR),
-        (emitter.clone(), EMITTER),
-    ]);
-    let mesh = Mesh::build(&s, f32::INFINITY);
-    assert_eq!(mesh.elements.len(), 3);
+    let (s, mesh, emitter) = mirror_scene(0.5);
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let paths = SpecularPaths::new(&mesh, &accel, &s.materials)
         .with_shading_normals(&s.surfaces)
         .with_light_paths(|count, trace| (0..count).map(trace).collect());
-    let ff = compute_extended(&mesh, &params(128), &paths, &|| {}).0;
+    let ff = compute_extended(&mesh, &hemicube_params(128), &paths, &|| {}).0;
     let image: Vec<Vec3> = emitter.iter().map(|v| Vec3::new(v.x, -v.y, v.z)).collect();
     let m = 20;
     let mut average = 0.0;

@@ -1,18 +1,17 @@
-//! Specification tests of pass two: the accelerator against brute force, the camera's conventions and
-//! the Whitted tracer on small hand-built scenes with hand-made radiosity solutions.
+//! Specification tests of pass two: the camera's conventions and the Whitted tracer on small hand-built
+//! scenes with hand-made radiosity solutions. (The accelerator's tests live beside it, in `src/accel.rs`.)
+
+mod common;
 
 use std::f32::consts::PI;
-use std::path::PathBuf;
 
-use glam::{vec3, DVec3, Vec3};
-use radray::accel::{intersect_triangle_f64, Accel, WatertightRay};
+use common::{cornell_camera, emitter, glass, mirror, scene, solution, surface, z_quad};
+use glam::{vec3, Vec3};
+use radray::accel::Accel;
 use radray::mesh::Mesh;
-use radray::radiosity::solution::{Solution, SolveStats};
+use radray::radiosity::solution::Solution;
 use radray::rng::Pcg32;
-use radray::scene::{
-    Camera, DirectMode, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SolverKind,
-    SourceLoc, Surface,
-};
+use radray::scene::{Camera, DirectMode, Material, RenderParams, SceneDescription, Surface};
 use radray::trace::{PinholeCamera, RayCounts, TraceMode, Tracer};
 
 // ---------------------------------------------------------------------------------------------
@@ -30,56 +29,6 @@ fn random_unit(rng: &mut Pcg32) -> Vec3 {
         if l > 0.1 && l <= 1.0 {
             return v / l;
         }
-    }
-}
-
-fn surface(vertices: [Vec3; 4], material: u32, two_sided: bool) -> Surface {
-    Surface {
-        vertices: vertices.to_vec(),
-        material,
-        two_sided,
-        shading_normals: None,
-        object: String::new(),
-        source: SourceLoc::default(),
-    }
-}
-
-fn scene(materials: Vec<Material>, surfaces: Vec<Surface>) -> SceneDescription {
-    SceneDescription {
-        path: PathBuf::from("test.scene"),
-        camera: Camera { eye: vec3(0.0, 0.0, 5.0), look_at: Vec3::ZERO, up: Vec3::Y, vfov_deg: 40.0 },
-        image: ImageSettings::default(),
-        radiosity: RadiosityParams::default(),
-        render: RenderParams::default(),
-        materials,
-        surfaces,
-        warnings: Vec::new(),
-    }
-}
-
-fn emitter(name: &str, radiance: Vec3) -> Material {
-    Material { emitted_radiance: radiance, ..Material::diffuse(name, Vec3::ZERO) }
-}
-
-/// A hand-made solution: per-element exitance and direct part, vertex values by the mesh's
-/// area-weighted averaging.
-fn solution(mesh: &Mesh, exitance: Vec<Vec3>, direct: Vec<Vec3>) -> Solution {
-    let average = |values: &[Vec3]| -> Vec<Vec3> {
-        let wide: Vec<DVec3> = values.iter().map(|v| v.as_dvec3()).collect();
-        mesh.vertex_average(&wide).iter().map(|v| v.as_vec3()).collect()
-    };
-    Solution {
-        vertex_exitance: average(&exitance),
-        vertex_direct_exitance: average(&direct),
-        element_exitance: exitance,
-        element_direct_exitance: direct,
-        mesh_fingerprint: 0,
-        stats: SolveStats {
-            solver: SolverKind::GaussSeidel,
-            iterations: 0,
-            residual_history: Vec::new(),
-            converged: true,
-        },
     }
 }
 
@@ -122,127 +71,8 @@ fn assert_close(a: Vec3, b: Vec3, tol: f32, what: &str) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Accelerator
-// ---------------------------------------------------------------------------------------------
-
-fn triangle_soup(rng: &mut Pcg32, count: usize) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for i in 0..count {
-        let centre = random_vec(rng) * 10.0;
-        for _ in 0..3 {
-            positions.push(centre + (random_vec(rng) - Vec3::splat(0.5)) * 1.5);
-        }
-        let b = 3 * i as u32;
-        triangles.push([b, b + 1, b + 2]);
-    }
-    (positions, triangles)
-}
-
-fn brute_force_closest(positions: &[Vec3], triangles: &[[u32; 3]], origin: Vec3, dir: Vec3) -> Option<(u32, f32)> {
-    let ray = WatertightRay::new(origin, dir);
-    let mut best: Option<(u32, f32)> = None;
-    for (i, t) in triangles.iter().enumerate() {
-        let [a, b, c] = t.map(|v| positions[v as usize]);
-        if let Some(h) = ray.intersect(a, b, c, 0.0, best.map_or(f32::INFINITY, |b| b.1)) {
-            if best.is_none_or(|b| h.t < b.1) {
-                best = Some((i as u32, h.t));
-            }
-        }
-    }
-    best
-}
-
-#[test]
-fn bvh_closest_hit_matches_brute_force_on_random_soup() {
-    let mut rng = Pcg32::new(42, 0);
-    let (positions, triangles) = triangle_soup(&mut rng, 3000);
-    let accel = Accel::build(&positions, &triangles);
-    let mut hits = 0;
-    for _ in 0..3000 {
-        let origin = random_vec(&mut rng) * 14.0 - Vec3::splat(2.0);
-        let dir = random_unit(&mut rng);
-        let bvh = accel.closest_hit(origin, dir, 0.0, f32::INFINITY);
-        let brute = brute_force_closest(&positions, &triangles, origin, dir);
-        match (bvh, brute) {
-            (None, None) => {}
-            (Some(h), Some((tri, t))) => {
-                hits += 1;
-                // The same watertight test runs in both: identical distances. The triangle may differ
-                // only on an exact tie.
-                assert_eq!(h.t, t, "ray {origin} {dir}");
-                if h.triangle != tri {
-                    let other = triangles[h.triangle as usize].map(|v| positions[v as usize]);
-                    let t2 = WatertightRay::new(origin, dir).intersect(other[0], other[1], other[2], 0.0, f32::MAX);
-                    assert_eq!(t2.map(|h| h.t), Some(t), "tie expected");
-                }
-                // Independent double-precision reference for distance and barycentrics: f32
-                // coordinates of order 10 carry ~1e-6 absolute error, amplified by at most a few
-                // hundred at grazing incidence in random soups.
-                let [a, b, c] = triangles[h.triangle as usize].map(|v| positions[v as usize]);
-                if let Some((t64, u64, v64)) = intersect_triangle_f64(origin, dir, a, b, c) {
-                    assert!((h.t as f64 - t64).abs() < 1e-3 * t64.max(1.0), "t {} vs {t64}", h.t);
-                    assert!((h.u as f64 - u64).abs() < 1e-3 && (h.v as f64 - v64).abs() < 1e-3);
-                }
-            }
-            (a, b) => panic!("ray {origin} {dir}: bvh {a:?} vs brute force {b:?}"),
-        }
-    }
-    assert!(hits > 500, "the soup should be hit often, got {hits}");
-}
-
-#[test]
-fn bvh_occlusion_matches_brute_force() {
-    let mut rng = Pcg32::new(7, 3);
-    let (positions, triangles) = triangle_soup(&mut rng, 2000);
-    let accel = Accel::build(&positions, &triangles);
-    let (mut blocked, mut free) = (0, 0);
-    for _ in 0..3000 {
-        let origin = random_vec(&mut rng) * 14.0 - Vec3::splat(2.0);
-        let dir = random_unit(&mut rng);
-        let t_max = rng.next_f32() * 8.0;
-        let brute = brute_force_closest(&positions, &triangles, origin, dir).is_some_and(|(_, t)| t < t_max);
-        // The any-hit query accepts t ≤ t_max; exclude rays whose closest hit sits within rounding of t_max.
-        if brute_force_closest(&positions, &triangles, origin, dir).is_some_and(|(_, t)| (t - t_max).abs() < 1e-5) {
-            continue;
-        }
-        assert_eq!(accel.occluded(origin, dir, t_max), brute, "ray {origin} {dir} t_max {t_max}");
-        if brute {
-            blocked += 1;
-        } else {
-            free += 1;
-        }
-    }
-    assert!(blocked > 200 && free > 200, "both outcomes exercised: {blocked} blocked, {free} free");
-}
-
-#[test]
-fn closest_hit_respects_t_min_and_t_max() {
-    // Two parallel triangles at z = 0 and z = −1 under a ray going down from z = 1.
-    let positions = [
-        vec3(-1.0, -1.0, 0.0),
-        vec3(1.0, -1.0, 0.0),
-        vec3(0.0, 1.0, 0.0),
-        vec3(-1.0, -1.0, -1.0),
-        vec3(1.0, -1.0, -1.0),
-        vec3(0.0, 1.0, -1.0),
-    ];
-    let accel = Accel::build(&positions, &[[0, 1, 2], [3, 4, 5]]);
-    let o = vec3(0.0, 0.0, 1.0);
-    assert_eq!(accel.closest_hit(o, Vec3::NEG_Z, 0.0, 10.0).map(|h| h.triangle), Some(0));
-    assert_eq!(accel.closest_hit(o, Vec3::NEG_Z, 1.5, 10.0).map(|h| h.triangle), Some(1));
-    assert_eq!(accel.closest_hit(o, Vec3::NEG_Z, 0.0, 0.5), None);
-    // Back sides are hit too.
-    assert_eq!(accel.closest_hit(vec3(0.0, 0.0, -2.0), Vec3::Z, 0.0, 10.0).map(|h| h.triangle), Some(1));
-}
-
-// ---------------------------------------------------------------------------------------------
 // Camera
 // ---------------------------------------------------------------------------------------------
-
-fn cornell_camera() -> Camera {
-    Camera { eye: vec3(278.0, 273.0, -800.0), look_at: vec3(278.0, 273.0, 0.0), up: Vec3::Y, vfov_deg: 39.307_648 }
-}
 
 #[test]
 fn centre_of_the_film_looks_at_look_at() {
@@ -289,16 +119,6 @@ fn vertical_field_of_view_spans_the_film_height() {
 // ---------------------------------------------------------------------------------------------
 // Whitted tracer
 // ---------------------------------------------------------------------------------------------
-
-/// Quad in the plane z = `z`, side 2·`half`, facing +z (or −z).
-fn z_quad(z: f32, half: f32, facing_plus_z: bool, material: u32, two_sided: bool) -> Surface {
-    let (a, b, c, d) = (vec3(-half, -half, z), vec3(half, -half, z), vec3(half, half, z), vec3(-half, half, z));
-    if facing_plus_z {
-        surface([a, b, c, d], material, two_sided)
-    } else {
-        surface([a, d, c, b], material, two_sided)
-    }
-}
 
 #[test]
 fn emitter_seen_directly_is_exactly_ke_in_every_mode() {
@@ -349,7 +169,7 @@ fn back_face_of_one_sided_surface_is_black_and_two_sided_shows_its_back() {
 
 #[test]
 fn mirror_shows_ks_times_the_reflected_surface() {
-    let mirror = Material { specular_reflectance: Vec3::splat(0.9), ..Material::diffuse("mirror", Vec3::ZERO) };
+    let mirror = mirror("mirror", 0.9);
     let wall = Material::diffuse("wall", Vec3::splat(0.5));
     let wall_radiance = vec3(1.0, 2.0, 3.0);
     // Mirror in z = 0 facing +z; wall in x = 3 facing −x.
@@ -375,12 +195,7 @@ fn mirror_shows_ks_times_the_reflected_surface() {
 
 #[test]
 fn glass_slab_transmits_the_multiple_reflection_series() {
-    let glass = Material {
-        specular_reflectance: Vec3::ONE,
-        ior: 1.5,
-        transmittance: 1.0,
-        ..Material::diffuse("glass", Vec3::ZERO)
-    };
+    let glass = glass("glass");
     let ke = vec3(1.0, 2.0, 4.0);
     // Slab between z = −0.1 and z = 0 (outward normals ±z), emitter at z = −1 facing the slab.
     let scene = scene(
@@ -416,12 +231,7 @@ fn glass_slab_transmits_the_multiple_reflection_series() {
 fn total_internal_reflection_keeps_light_inside_glass() {
     // A ray inside a slab hitting its face beyond the critical angle (41.8°) is reflected
     // completely: the emitter behind that face stays invisible along the refracted direction.
-    let glass = Material {
-        specular_reflectance: Vec3::ONE,
-        ior: 1.5,
-        transmittance: 1.0,
-        ..Material::diffuse("glass", Vec3::ZERO)
-    };
+    let glass = glass("glass");
     let scene = scene(
         vec![glass, emitter("light", Vec3::ONE)],
         vec![
@@ -613,7 +423,7 @@ fn shading_normals_bend_mirror_rays() {
     // A flat mirror in z = 0 whose vertex normals all lean 10° towards +x: a ray straight down
     // leaves at 20° from the vertical and reaches a wall strip (x ≥ 1 at z = 5; 5·tan 20° = 1.82)
     // that the geometric reflection (straight up, x = 0) misses.
-    let mirror = Material { specular_reflectance: Vec3::splat(0.9), ..Material::diffuse("mirror", Vec3::ZERO) };
+    let mirror = mirror("mirror", 0.9);
     let wall = Material::diffuse("wall", Vec3::splat(0.5));
     let tilt = 10f32.to_radians();
     let mut mirror_surface = z_quad(0.0, 10.0, true, 0, false);

@@ -1,13 +1,18 @@
 //! The plain scene description: camera, image and solver settings, materials and surfaces, as parsed
 //! from a scene file. Nothing here builds meshes or acceleration structures (see `mesh` and `accel`).
 
+pub mod instance;
+pub mod lint;
 pub mod obj;
 pub mod parse;
+pub mod shapes;
+pub mod validate;
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
-pub use parse::{check_camera, check_material, load, parse_str, SceneError};
+pub use parse::{load, parse_str, SceneError};
+pub use validate::{check_camera, check_material};
 
 /// Where a piece of scene data came from, for error messages and warnings (pbrt's `FileLoc`).
 #[derive(Clone, Debug, PartialEq, Eq, Default)]

@@ -1,9 +1,16 @@
-//! Scene files (TOML) → `SceneDescription`. Every key is checked: unknown keys, missing files,
-//! non-finite numbers, impossible cameras and materials are errors with the file and line; degenerate
-//! faces and a scene without emitters are warnings.
+//! Scene files (TOML) → `SceneDescription`, with every error located at its file and line
+//! (`toml::Spanned`). Every key is checked (`validate`): unknown keys, missing files, non-finite
+//! numbers, impossible cameras and materials are errors; degenerate faces and a scene without emitters
+//! are warnings. Primitives become polygons in `shapes`, `[[mesh]]` instances are placed by `instance`.
 
+use super::instance::Placement;
 use super::obj::{self, ObjError};
+use super::shapes::{box_faces, normalise_surfaces, sphere_triangles};
+use super::validate::{CameraField, MaterialField};
 use super::*;
+
+/// The old path of [`super::check_material`], still used by `batch.rs`; prefer `scene::check_material`.
+pub use super::validate::check_material;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -175,7 +182,7 @@ fn default_segments() -> S<i64> {
 }
 
 /// Turns byte offsets into source locations.
-struct Locator<'a> {
+pub(super) struct Locator<'a> {
     path: &'a Path,
     text: &'a str,
 }
@@ -190,51 +197,8 @@ impl Locator<'_> {
         SourceLoc { path: self.path.to_path_buf(), line }
     }
 
-    fn error<T>(&self, span: std::ops::Range<usize>, message: impl Into<String>) -> Result<T, SceneError> {
+    pub(super) fn error<T>(&self, span: std::ops::Range<usize>, message: impl Into<String>) -> Result<T, SceneError> {
         Err(SceneError::Invalid { loc: self.at(span), message: message.into() })
-    }
-
-    fn finite3(&self, v: &S<[f32; 3]>, what: &str) -> Result<Vec3, SceneError> {
-        if v.get_ref().iter().all(|x| x.is_finite()) {
-            Ok(Vec3::from(*v.get_ref()))
-        } else {
-            self.error(v.span(), format!("{what} must be finite numbers, got {:?}", v.get_ref()))
-        }
-    }
-
-    fn positive_int(
-        &self,
-        v: &Option<S<i64>>,
-        what: &str,
-        min: i64,
-        max: i64,
-        default: u32,
-    ) -> Result<u32, SceneError> {
-        match v {
-            None => Ok(default),
-            Some(s) if (min..=max).contains(s.get_ref()) => Ok(*s.get_ref() as u32),
-            Some(s) => self.error(s.span(), format!("{what} must be between {min} and {max}, got {}", s.get_ref())),
-        }
-    }
-
-    fn ranged<T: Copy + PartialOrd + std::fmt::Display + Into<f64>>(
-        &self,
-        v: &Option<S<T>>,
-        what: &str,
-        ok: impl Fn(f64) -> bool,
-        expect: &str,
-    ) -> Result<Option<T>, SceneError> {
-        match v {
-            None => Ok(None),
-            Some(s) => {
-                let x: f64 = (*s.get_ref()).into();
-                if x.is_finite() && ok(x) {
-                    Ok(Some(*s.get_ref()))
-                } else {
-                    self.error(s.span(), format!("{what} must be {expect}, got {}", s.get_ref()))
-                }
-            }
-        }
     }
 }
 
@@ -264,26 +228,17 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
             return loc.error(span, format!("material `{}` is defined twice", m.name));
         }
         let v3 = |v: &Option<S<[f32; 3]>>, what| v.as_ref().map(|v| loc.finite3(v, what)).transpose();
-        let scalar = |v: &Option<S<f32>>| v.as_ref().map(|s| (*s.get_ref(), s.span()));
         let mut material = Material::diffuse(&m.name, v3(&m.kd, "kd")?.unwrap_or(Vec3::ZERO));
         material.emitted_radiance = v3(&m.ke, "ke")?.unwrap_or(Vec3::ZERO);
         material.specular_reflectance = v3(&m.ks, "ks")?.unwrap_or(Vec3::ZERO);
-        if let Some((ns, s)) = scalar(&m.ns) {
-            if !(ns.is_finite() && ns > 0.0) {
-                return loc.error(s, format!("ns (Phong exponent) must be a positive number, got {ns}"));
-            }
+        let positive = |x: f64| x > 0.0;
+        if let Some(ns) = loc.ranged(&m.ns, "ns (Phong exponent)", positive, "a positive number")? {
             material.phong_exponent = Some(ns);
         }
-        if let Some((ni, s)) = scalar(&m.ni) {
-            if !(ni.is_finite() && ni > 0.0) {
-                return loc.error(s, format!("ni (index of refraction) must be a positive number, got {ni}"));
-            }
+        if let Some(ni) = loc.ranged(&m.ni, "ni (index of refraction)", positive, "a positive number")? {
             material.ior = ni;
         }
-        if let Some((d, s)) = scalar(&m.d) {
-            if !(d.is_finite() && (0.0..=1.0).contains(&d)) {
-                return loc.error(s, format!("d (dissolve) must be in [0, 1], got {d}"));
-            }
+        if let Some(d) = loc.ranged(&m.d, "d (dissolve)", |x| (0.0..=1.0).contains(&x), "in [0, 1]")? {
             material.transmittance = 1.0 - d;
         }
         if let Err((field, message)) = check_material(&material) {
@@ -308,19 +263,19 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
     let mut surfaces: Vec<Surface> = Vec::new();
     let mut warnings = Vec::new();
     let inline = |span: std::ops::Range<usize>| loc.at(span);
-    for q in &raw.quad {
-        let qv = q.get_ref();
-        let corners = finite_points(&loc, &qv.corners)?;
-        let material = find(&qv.material)?;
-        let name = qv.name.clone().unwrap_or_else(|| "quad".into());
-        surfaces.push(surface(corners, material, qv.two_sided, &name, inline(q.span())));
-    }
-    for t in &raw.triangle {
-        let tv = t.get_ref();
-        let vertices = finite_points(&loc, &tv.vertices)?;
-        let material = find(&tv.material)?;
-        let name = tv.name.clone().unwrap_or_else(|| "triangle".into());
-        surfaces.push(surface(vertices, material, tv.two_sided, &name, inline(t.span())));
+    // A [[quad]] and a [[triangle]] are the same thing: a polygon given corner by corner.
+    let quads = raw.quad.iter().map(|q| {
+        let v = q.get_ref();
+        Ok::<_, SceneError>((loc.finite_points(&v.corners)?, &v.material, v.two_sided, &v.name, "quad", q.span()))
+    });
+    let triangles = raw.triangle.iter().map(|t| {
+        let v = t.get_ref();
+        Ok((loc.finite_points(&v.vertices)?, &v.material, v.two_sided, &v.name, "triangle", t.span()))
+    });
+    for polygon in quads.chain(triangles) {
+        let (corners, material, two_sided, name, kind, span) = polygon?;
+        let name = name.as_deref().unwrap_or(kind);
+        surfaces.push(surface(corners, find(material)?, two_sided, name, inline(span)));
     }
     for b in &raw.boxes {
         let bv = b.get_ref();
@@ -375,26 +330,7 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
         }
         materials.extend(contents.materials);
         warnings.extend(contents.warnings);
-        // A negative scale mirrors the mesh, which flips the winding: restore counter-clockwise.
-        let mirrored = scale.x * scale.y * scale.z < 0.0;
-        for mut s in contents.surfaces {
-            s.material += base;
-            for v in &mut s.vertices {
-                *v = *v * scale + translate;
-            }
-            if let Some(normals) = &mut s.shading_normals {
-                for n in normals.iter_mut() {
-                    *n = (*n / scale).normalize_or_zero();
-                }
-            }
-            if mirrored {
-                s.vertices.reverse();
-                if let Some(n) = &mut s.shading_normals {
-                    n.reverse();
-                }
-            }
-            surfaces.push(s);
-        }
+        surfaces.extend(Placement { scale, translate }.apply(contents.surfaces, base));
     }
 
     // Split what the mesher cannot take (polygons beyond quads, non-convex quads), drop zero-area faces.
@@ -449,102 +385,6 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
 
 fn surface(vertices: Vec<Vec3>, material: u32, two_sided: bool, name: &str, source: SourceLoc) -> Surface {
     Surface { vertices, material, two_sided, shading_normals: None, object: name.to_string(), source }
-}
-
-fn finite_points<const N: usize>(loc: &Locator, v: &S<[[f32; 3]; N]>) -> Result<Vec<Vec3>, SceneError> {
-    if v.get_ref().iter().flatten().all(|x| x.is_finite()) {
-        Ok(v.get_ref().iter().map(|&p| Vec3::from(p)).collect())
-    } else {
-        loc.error(v.span(), "coordinates must be finite numbers")
-    }
-}
-
-/// Which part of a material `check_material` found wrong (to point at its line).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MaterialField {
-    Kd,
-    Ks,
-    Ke,
-    /// The material as a whole (energy, dissolve, index of refraction).
-    Energy,
-}
-
-/// Checks a material's physical sense. Reflectances lie in [0, 1); emission is non-negative; and energy
-/// is conserved: Kd + Ks + (1 − d) ≤ 1 per channel for an opaque or partly reflective surface. For a
-/// dielectric, Fresnel splits what is not diffusely reflected between reflection (scaled by Ks) and
-/// transmission (scaled by 1 − d), so there the bound is Kd + max(Ks, 1 − d) ≤ 1 — which admits the
-/// standard MTL glass (Ks 1, d 0).
-pub fn check_material(m: &Material) -> Result<(), (MaterialField, String)> {
-    let in_unit = |v: Vec3, upper_open: bool| {
-        v.is_finite()
-            && v.min_element() >= 0.0
-            && if upper_open { v.max_element() < 1.0 } else { v.max_element() <= 1.0 }
-    };
-    if !in_unit(m.diffuse_reflectance, true) {
-        return Err((
-            MaterialField::Kd,
-            format!("diffuse reflectance Kd must lie in [0, 1), got {:?}", m.diffuse_reflectance.to_array()),
-        ));
-    }
-    if !in_unit(m.specular_reflectance, false) {
-        return Err((
-            MaterialField::Ks,
-            format!("mirror reflectance Ks must lie in [0, 1], got {:?}", m.specular_reflectance.to_array()),
-        ));
-    }
-    if !(m.emitted_radiance.is_finite() && m.emitted_radiance.min_element() >= 0.0) {
-        return Err((
-            MaterialField::Ke,
-            format!("emitted radiance Ke must be finite and non-negative, got {:?}", m.emitted_radiance.to_array()),
-        ));
-    }
-    if !(m.transmittance.is_finite() && (0.0..=1.0).contains(&m.transmittance)) {
-        return Err((MaterialField::Energy, format!("dissolve d must lie in [0, 1], got {}", 1.0 - m.transmittance)));
-    }
-    if !(m.ior.is_finite() && m.ior > 0.0) {
-        return Err((MaterialField::Energy, format!("index of refraction Ni must be positive, got {}", m.ior)));
-    }
-    let t = Vec3::splat(m.transmittance);
-    let (total, rule) = if m.is_dielectric() {
-        (m.diffuse_reflectance + m.specular_reflectance.max(t), "Kd + max(Ks, 1 - d)")
-    } else {
-        (m.diffuse_reflectance + m.specular_reflectance, "Kd + Ks")
-    };
-    if total.max_element() > 1.0 + 1e-6 {
-        return Err((
-            MaterialField::Energy,
-            format!("{rule} = {:?} exceeds 1: the material would create energy", total.to_array()),
-        ));
-    }
-    Ok(())
-}
-
-/// Checks that a camera can form an image: a field of view in (0°, 180°), `eye` away from `look_at`,
-/// and `up` neither zero nor parallel to the view direction.
-pub fn check_camera(c: &Camera) -> Result<(), (CameraField, String)> {
-    if !(c.vfov_deg.is_finite() && c.vfov_deg > 0.0 && c.vfov_deg < 180.0) {
-        return Err((CameraField::VfovDeg, format!("vfov_deg must lie in (0, 180) degrees, got {}", c.vfov_deg)));
-    }
-    if !(c.eye.is_finite() && c.look_at.is_finite() && c.up.is_finite()) {
-        return Err((CameraField::Eye, "eye, look_at and up must be finite".to_string()));
-    }
-    let forward = c.look_at - c.eye;
-    if !(forward.length() > 1e-6 * c.eye.length().max(1.0)) {
-        return Err((CameraField::LookAt, "look_at must differ from eye".to_string()));
-    }
-    if !(c.up.length() > 0.0) || forward.normalize().cross(c.up.normalize()).length() < 1e-4 {
-        return Err((CameraField::Up, "up must not be zero or parallel to the view direction".to_string()));
-    }
-    Ok(())
-}
-
-/// Which camera key `check_camera` found wrong.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CameraField {
-    Eye,
-    LookAt,
-    Up,
-    VfovDeg,
 }
 
 fn camera(loc: &Locator, c: &S<RawCamera>) -> Result<Camera, SceneError> {
@@ -665,90 +505,4 @@ fn render_params(loc: &Locator, raw: Option<&RawRender>, base: RenderParams) -> 
         p.min_throughput = t;
     }
     Ok(p)
-}
-
-/// The six faces of an axis-aligned box, counter-clockwise seen from outside (or inside if `inward`).
-pub fn box_faces(lo: Vec3, hi: Vec3, inward: bool) -> Vec<[Vec3; 4]> {
-    let p = |x: bool, y: bool, z: bool| {
-        Vec3::new(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z })
-    };
-    let mut faces = vec![
-        [p(false, false, false), p(false, false, true), p(false, true, true), p(false, true, false)], // x-
-        [p(true, false, false), p(true, true, false), p(true, true, true), p(true, false, true)],     // x+
-        [p(false, false, false), p(true, false, false), p(true, false, true), p(false, false, true)], // y-
-        [p(false, true, false), p(false, true, true), p(true, true, true), p(true, true, false)],     // y+
-        [p(false, false, false), p(false, true, false), p(true, true, false), p(true, false, false)], // z-
-        [p(false, false, true), p(true, false, true), p(true, true, true), p(false, true, true)],     // z+
-    ];
-    if inward {
-        for f in &mut faces {
-            f.reverse();
-        }
-    }
-    faces
-}
-
-/// A UV sphere as triangles, counter-clockwise seen from outside.
-pub fn sphere_triangles(centre: Vec3, radius: f32, segments: u32) -> Vec<[Vec3; 3]> {
-    let rings = (segments / 2).max(2);
-    let point = |ring: u32, seg: u32| {
-        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
-        let phi = 2.0 * std::f32::consts::PI * seg as f32 / segments as f32;
-        centre + radius * Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin())
-    };
-    let mut tris = Vec::new();
-    for ring in 0..rings {
-        for seg in 0..segments {
-            let (a, b, c, d) = (point(ring, seg), point(ring + 1, seg), point(ring + 1, seg + 1), point(ring, seg + 1));
-            if ring > 0 {
-                tris.push([a, b, d]);
-            }
-            if ring + 1 < rings {
-                tris.push([b, c, d]);
-            }
-        }
-    }
-    tris
-}
-
-/// Makes every surface something the mesher takes: triangles and convex quads stay; larger polygons
-/// and non-convex quads become triangle fans; zero-area pieces are dropped and counted.
-fn normalise_surfaces(surfaces: Vec<Surface>) -> (Vec<Surface>, usize) {
-    let mut out = Vec::with_capacity(surfaces.len());
-    let mut degenerate = 0;
-    for s in surfaces {
-        let n = polygon_normal(&s.vertices);
-        let extent = s.vertices.iter().map(|v| (*v - s.vertices[0]).length()).fold(0.0f32, f32::max);
-        if !(n.length() > 1e-6 * extent * extent) || !n.is_finite() {
-            degenerate += 1;
-            continue;
-        }
-        if s.vertices.len() == 3 || (s.vertices.len() == 4 && is_convex(&s.vertices, n)) {
-            out.push(s);
-            continue;
-        }
-        for k in 1..s.vertices.len() - 1 {
-            let tri = vec![s.vertices[0], s.vertices[k], s.vertices[k + 1]];
-            let tn = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-            if !(tn.length() > 1e-6 * extent * extent) {
-                degenerate += 1;
-                continue;
-            }
-            let normals = s.shading_normals.as_ref().map(|n| vec![n[0], n[k], n[k + 1]]);
-            out.push(Surface { vertices: tri, shading_normals: normals, ..s.clone() });
-        }
-    }
-    (out, degenerate)
-}
-
-/// Newell's normal (twice the vector area) of a polygon.
-fn polygon_normal(v: &[Vec3]) -> Vec3 {
-    (0..v.len()).map(|i| v[i].cross(v[(i + 1) % v.len()])).sum()
-}
-
-fn is_convex(v: &[Vec3], n: Vec3) -> bool {
-    (0..v.len()).all(|i| {
-        let (a, b, c) = (v[i], v[(i + 1) % v.len()], v[(i + 2) % v.len()]);
-        (b - a).cross(c - b).dot(n) > 0.0
-    })
 }

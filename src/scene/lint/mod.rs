@@ -1,0 +1,266 @@
+//! Suspicious-geometry checks for `radray info`: T-junctions, coplanar overlapping faces, intersecting
+//! faces, normals flipped relative to their neighbours and non-planar polygons — the usual sources of
+//! radiosity light leaks and cracks, found from the scene's polygons before anything is solved.
+//!
+//! Every check is a pure function of the surfaces, one per file. Candidate pairs come from a uniform
+//! grid over the faces' bounding boxes (`grid`, each pair visited once), so the cost grows with the
+//! number of nearby pairs, not with n². Geometry is evaluated in f64 (`polygon`). Lengths are compared
+//! with one absolute tolerance, `relative_tolerance` × the scene's bounding-box diagonal (never below
+//! the f32 spacing of the scene's coordinates): see [`LintOptions`]. This file holds the report's types
+//! and runs the checks; `report` prints it.
+
+pub mod crossings;
+pub mod flipped;
+mod grid;
+pub mod overlaps;
+pub mod planarity;
+pub mod polygon;
+mod report;
+pub mod t_junctions;
+mod weld;
+
+pub use polygon::Poly;
+
+use crate::scene::{SceneDescription, Surface};
+use glam::DVec3;
+use serde::Serialize;
+
+/// Settings of [`check_surfaces`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct LintOptions {
+    /// Length tolerance as a fraction of the scene's bounding-box diagonal. The default 1e-5 is
+    /// ~100 f32 ulps of a scene's extent (far above rounding noise) and ten times finer than the
+    /// deliberate 0.1 mm gap between the Cornell box's light and its ceiling (1e-4 of its diagonal).
+    pub relative_tolerance: f64,
+    /// How many examples of each finding the report keeps (the counts are always complete).
+    pub max_examples: usize,
+}
+
+impl Default for LintOptions {
+    fn default() -> Self {
+        LintOptions { relative_tolerance: 1e-5, max_examples: 5 }
+    }
+}
+
+/// A scene surface named in a finding.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SurfaceRef {
+    /// Index into `SceneDescription::surfaces`.
+    pub index: usize,
+    /// The surface's object (OBJ `o`/`g`) or primitive name.
+    pub object: String,
+}
+
+impl SurfaceRef {
+    /// Names `surfaces[index]`.
+    pub fn of(surfaces: &[Surface], index: usize) -> SurfaceRef {
+        SurfaceRef { index, object: surfaces[index].object.clone() }
+    }
+}
+
+/// A vertex of one surface lying strictly inside an edge of another.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TJunction {
+    /// The surface whose edge the vertex splits.
+    pub edge_surface: SurfaceRef,
+    /// A surface that has the vertex as a corner.
+    pub vertex_surface: SurfaceRef,
+    /// The vertex.
+    pub point: [f32; 3],
+}
+
+/// Two faces in one plane whose polygons overlap with positive area.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CoplanarOverlap {
+    pub a: SurfaceRef,
+    pub b: SurfaceRef,
+    /// Both face the same way (z-fighting) rather than back to back.
+    pub same_facing: bool,
+    /// Area of the overlap (scene units²).
+    pub overlap_area: f64,
+    /// Centroid of the overlap.
+    pub point: [f32; 3],
+}
+
+/// Two non-coplanar faces whose interiors cross.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Intersection {
+    pub a: SurfaceRef,
+    pub b: SurfaceRef,
+    /// Length of the segment along which the faces cross.
+    pub length: f64,
+    /// Middle of that segment.
+    pub point: [f32; 3],
+}
+
+/// A face whose winding disagrees with the neighbours it shares edges with.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FlippedFace {
+    pub surface: SurfaceRef,
+    /// A neighbour that traverses a shared edge in the same direction.
+    pub neighbour: SurfaceRef,
+    /// Middle of that shared edge.
+    pub point: [f32; 3],
+}
+
+/// A polygon whose corners do not lie in one plane.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NonPlanar {
+    pub surface: SurfaceRef,
+    /// Largest distance of a corner from the polygon's best plane (Newell normal through the centroid).
+    pub deviation: f64,
+    /// The corner farthest from that plane.
+    pub point: [f32; 3],
+}
+
+/// How many findings of one kind, and the first few (ordered by surface index).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Findings<T> {
+    pub count: usize,
+    pub examples: Vec<T>,
+}
+
+impl<T> Findings<T> {
+    /// All findings of one kind, already in report order: counted, the first `max_examples` kept.
+    pub fn new(mut all: Vec<T>, max_examples: usize) -> Self {
+        let count = all.len();
+        all.truncate(max_examples);
+        Findings { count, examples: all }
+    }
+}
+
+/// Flipped faces of one object.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ObjectCount {
+    pub object: String,
+    pub count: usize,
+}
+
+/// Faces flipped relative to their neighbours, with a count per object.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct FlippedFaces {
+    /// Faces whose winding disagrees with the majority of their edge-connected patch.
+    pub count: usize,
+    /// Shared edges traversed in the same direction by both faces.
+    pub inconsistent_edges: usize,
+    pub per_object: Vec<ObjectCount>,
+    pub examples: Vec<FlippedFace>,
+}
+
+/// What [`check`] found.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GeometryReport {
+    pub surface_count: usize,
+    /// Surfaces left out of every check: fewer than 3 corners, non-finite corners or zero area.
+    pub skipped_surfaces: usize,
+    /// Diagonal of the scene's bounding box.
+    pub scene_diagonal: f64,
+    /// The absolute length tolerance every check used.
+    pub tolerance: f64,
+    /// Pairs of faces whose (tolerance-grown) bounding boxes overlap: the pairs actually examined.
+    pub candidate_pairs: usize,
+    pub t_junctions: Findings<TJunction>,
+    pub coplanar_overlaps: Findings<CoplanarOverlap>,
+    pub intersections: Findings<Intersection>,
+    pub flipped: FlippedFaces,
+    pub non_planar: Findings<NonPlanar>,
+}
+
+impl GeometryReport {
+    /// No finding of any kind.
+    pub fn is_clean(&self) -> bool {
+        self.t_junctions.count == 0
+            && self.coplanar_overlaps.count == 0
+            && self.intersections.count == 0
+            && self.flipped.count == 0
+            && self.flipped.inconsistent_edges == 0
+            && self.non_planar.count == 0
+    }
+}
+
+/// Checks the scene's surfaces with the default options (see [`check_surfaces`]).
+pub fn check(scene: &SceneDescription) -> GeometryReport {
+    check_surfaces(&scene.surfaces, &LintOptions::default())
+}
+
+/// Runs every check over `surfaces` (planar convex polygons, counter-clockwise seen from the front):
+///
+/// - **T-junctions** ([`t_junctions::between`]): a corner of one face closer than the tolerance to the
+///   inside of another face's edge and farther than the tolerance from both of its endpoints. Each
+///   (vertex position, edge) is counted once.
+/// - **Coplanar overlaps** ([`overlaps::coplanar_overlap`]): parallel faces with every corner of each within the
+///   tolerance of the other's plane, whose polygons overlap by more than the tolerance on every
+///   separating axis (2-D SAT); touching along an edge or at a corner is not an overlap.
+/// - **Intersections** ([`crossings::crossing`]): non-coplanar faces, each with corners farther than the
+///   tolerance on both sides of the other's plane, whose intervals on the planes' line of intersection
+///   overlap by more than the tolerance (Möller 1997, "A fast triangle-triangle intersection test").
+/// - **Flipped faces** ([`flipped::flipped_faces`]): faces sharing an edge (both endpoints within the tolerance) that traverse it
+///   in the same direction; within each edge-connected patch the minority orientation is reported.
+///   Two-sided surfaces and edges shared by more than two faces are left out.
+/// - **Non-planar polygons** ([`planarity::non_planar`]): a corner farther than the tolerance from the polygon's best plane.
+pub fn check_surfaces(surfaces: &[Surface], options: &LintOptions) -> GeometryReport {
+    let polys: Vec<Option<Poly>> = surfaces.iter().map(|s| Poly::new(&s.vertices)).collect();
+    let skipped_surfaces = polys.iter().filter(|p| p.is_none()).count();
+    let (lo, hi) =
+        polys.iter().flatten().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p.lo), hi.max(p.hi)));
+    let scene_diagonal = if lo.x <= hi.x { (hi - lo).length() } else { 0.0 };
+    let magnitude = if lo.x <= hi.x { lo.abs().max(hi.abs()).max_element() } else { 0.0 };
+    let tolerance = (options.relative_tolerance * scene_diagonal).max(8.0 * f32::EPSILON as f64 * magnitude);
+    let tolerance = if tolerance > 0.0 { tolerance } else { f32::EPSILON as f64 };
+    let vertex_ids = weld::weld_vertices(&polys, tolerance);
+
+    // Pairwise checks over grid candidates.
+    let live: Vec<usize> = (0..polys.len()).filter(|&i| polys[i].is_some()).collect();
+    let boxes: Vec<(DVec3, DVec3)> = live
+        .iter()
+        .map(|&i| {
+            let p = polys[i].as_ref().expect("live surfaces have a polygon");
+            (p.lo - DVec3::splat(tolerance), p.hi + DVec3::splat(tolerance))
+        })
+        .collect();
+    let mut candidate_pairs = 0usize;
+    let mut t_junctions = t_junctions::Collector::new(surfaces, &vertex_ids, tolerance);
+    let mut coplanar_overlaps: Vec<CoplanarOverlap> = Vec::new();
+    let mut intersections: Vec<Intersection> = Vec::new();
+    grid::for_each_candidate_pair(&boxes, |a, b| {
+        candidate_pairs += 1;
+        let (i, j) = (live[a], live[b]);
+        let (pi, pj) = (polys[i].as_ref().expect("live"), polys[j].as_ref().expect("live"));
+        t_junctions.add_pair((i, pi), (j, pj));
+        if let Some(overlap) = overlaps::coplanar_overlap(pi, pj, tolerance) {
+            coplanar_overlaps.push(CoplanarOverlap {
+                a: SurfaceRef::of(surfaces, i),
+                b: SurfaceRef::of(surfaces, j),
+                same_facing: overlap.same_facing,
+                overlap_area: overlap.area,
+                point: to_f32(overlap.centroid),
+            });
+        } else if let Some((length, point)) = crossings::crossing(pi, pj, tolerance) {
+            intersections.push(Intersection {
+                a: SurfaceRef::of(surfaces, i),
+                b: SurfaceRef::of(surfaces, j),
+                length,
+                point: to_f32(point),
+            });
+        }
+    });
+    coplanar_overlaps.sort_by_key(|c| (c.a.index, c.b.index));
+    intersections.sort_by_key(|x| (x.a.index, x.b.index));
+
+    GeometryReport {
+        surface_count: surfaces.len(),
+        skipped_surfaces,
+        scene_diagonal,
+        tolerance,
+        candidate_pairs,
+        t_junctions: Findings::new(t_junctions.finish(), options.max_examples),
+        coplanar_overlaps: Findings::new(coplanar_overlaps, options.max_examples),
+        intersections: Findings::new(intersections, options.max_examples),
+        flipped: flipped::flipped_faces(surfaces, &polys, &vertex_ids, options.max_examples),
+        non_planar: Findings::new(planarity::non_planar(surfaces, &polys, tolerance), options.max_examples),
+    }
+}
+
+fn to_f32(p: DVec3) -> [f32; 3] {
+    p.as_vec3().to_array()
+}

@@ -1,0 +1,91 @@
+//! The built-in primitives as polygons ([[box]] faces, [[sphere]] triangles), and the normalisation
+//! that turns any parsed polygon into what the mesher takes (triangles and convex quads).
+
+use super::Surface;
+use glam::Vec3;
+
+/// The six faces of an axis-aligned box, counter-clockwise seen from outside (or inside if `inward`).
+pub fn box_faces(lo: Vec3, hi: Vec3, inward: bool) -> Vec<[Vec3; 4]> {
+    let p = |x: bool, y: bool, z: bool| {
+        Vec3::new(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z })
+    };
+    let mut faces = vec![
+        [p(false, false, false), p(false, false, true), p(false, true, true), p(false, true, false)], // x-
+        [p(true, false, false), p(true, true, false), p(true, true, true), p(true, false, true)],     // x+
+        [p(false, false, false), p(true, false, false), p(true, false, true), p(false, false, true)], // y-
+        [p(false, true, false), p(false, true, true), p(true, true, true), p(true, true, false)],     // y+
+        [p(false, false, false), p(false, true, false), p(true, true, false), p(true, false, false)], // z-
+        [p(false, false, true), p(true, false, true), p(true, true, true), p(false, true, true)],     // z+
+    ];
+    if inward {
+        for f in &mut faces {
+            f.reverse();
+        }
+    }
+    faces
+}
+
+/// A UV sphere as triangles, counter-clockwise seen from outside.
+pub fn sphere_triangles(centre: Vec3, radius: f32, segments: u32) -> Vec<[Vec3; 3]> {
+    let rings = (segments / 2).max(2);
+    let point = |ring: u32, seg: u32| {
+        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+        let phi = 2.0 * std::f32::consts::PI * seg as f32 / segments as f32;
+        centre + radius * Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin())
+    };
+    let mut tris = Vec::new();
+    for ring in 0..rings {
+        for seg in 0..segments {
+            let (a, b, c, d) = (point(ring, seg), point(ring + 1, seg), point(ring + 1, seg + 1), point(ring, seg + 1));
+            if ring > 0 {
+                tris.push([a, b, d]);
+            }
+            if ring + 1 < rings {
+                tris.push([b, c, d]);
+            }
+        }
+    }
+    tris
+}
+
+/// Makes every surface something the mesher takes: triangles and convex quads stay; larger polygons
+/// and non-convex quads become triangle fans; zero-area pieces are dropped and counted.
+pub(super) fn normalise_surfaces(surfaces: Vec<Surface>) -> (Vec<Surface>, usize) {
+    let mut out = Vec::with_capacity(surfaces.len());
+    let mut degenerate = 0;
+    for s in surfaces {
+        let n = polygon_normal(&s.vertices);
+        let extent = s.vertices.iter().map(|v| (*v - s.vertices[0]).length()).fold(0.0f32, f32::max);
+        if !(n.length() > 1e-6 * extent * extent) || !n.is_finite() {
+            degenerate += 1;
+            continue;
+        }
+        if s.vertices.len() == 3 || (s.vertices.len() == 4 && is_convex(&s.vertices, n)) {
+            out.push(s);
+            continue;
+        }
+        for k in 1..s.vertices.len() - 1 {
+            let tri = vec![s.vertices[0], s.vertices[k], s.vertices[k + 1]];
+            let tn = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+            if !(tn.length() > 1e-6 * extent * extent) {
+                degenerate += 1;
+                continue;
+            }
+            let normals = s.shading_normals.as_ref().map(|n| vec![n[0], n[k], n[k + 1]]);
+            out.push(Surface { vertices: tri, shading_normals: normals, ..s.clone() });
+        }
+    }
+    (out, degenerate)
+}
+
+/// Newell's normal (twice the vector area) of a polygon.
+fn polygon_normal(v: &[Vec3]) -> Vec3 {
+    (0..v.len()).map(|i| v[i].cross(v[(i + 1) % v.len()])).sum()
+}
+
+fn is_convex(v: &[Vec3], n: Vec3) -> bool {
+    (0..v.len()).all(|i| {
+        let (a, b, c) = (v[i], v[(i + 1) % v.len()], v[(i + 2) % v.len()]);
+        (b - a).cross(c - b).dot(n) > 0.0
+    })
+}
