@@ -2,11 +2,13 @@
 //! from a scene file. Nothing here builds meshes or acceleration structures (see `mesh` and `accel`).
 
 pub mod obj;
+pub mod overrides;
 pub mod parse;
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
+pub use overrides::Overrides;
 pub use parse::{check_camera, check_material, load, parse_str, SceneError};
 
 /// Where a piece of scene data came from, for error messages and warnings (pbrt's `FileLoc`).
