@@ -4,9 +4,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use radray::accel::Accel;
-use radray::cli::{self, Overrides, QualityArg};
-use radray::pipeline::{self, RunStats};
 use radray::progress::Progress;
+use radray::run::{self, RunStats};
+use radray::scene::{Overrides, Quality};
 use radray::trace::TraceMode;
 use std::hint::black_box;
 use std::path::Path;
@@ -18,18 +18,16 @@ fn scene_path(name: &str) -> std::path::PathBuf {
 fn whole_small_render(c: &mut Criterion) {
     let progress = Progress::hidden();
     let overrides =
-        Overrides { quality: Some(QualityArg::Preview), width: Some(128), height: Some(128), ..Default::default() };
+        Overrides { quality: Some(Quality::Preview), width_px: Some(128), height_px: Some(128), ..Default::default() };
     let mut group = c.benchmark_group("render");
     group.sample_size(10);
     group.bench_function("cornell_box preview 128x128 (parse, mesh, form factors, solve, trace)", |b| {
         b.iter(|| {
-            let scene = cli::load_scene(&scene_path("cornell_box.toml"), &overrides, &progress).unwrap();
+            let scene = run::load_scene(&scene_path("cornell_box.toml"), &overrides, &progress).unwrap();
             let mut stats = RunStats::default();
-            let (mesh, solution) = cli::pass_one(&scene, None, &progress, &mut stats).unwrap();
+            let (mesh, solution) = run::pass_one(&scene, None, &progress, &mut stats).unwrap();
             let accel = Accel::build(&mesh.positions, &mesh.triangles);
-            black_box(
-                pipeline::render(&scene, &mesh, &accel, &solution, TraceMode::Final, &progress, &mut stats).unwrap(),
-            )
+            black_box(run::render(&scene, &mesh, &accel, &solution, TraceMode::Final, &progress, &mut stats).unwrap())
         })
     });
     group.finish();
@@ -37,10 +35,11 @@ fn whole_small_render(c: &mut Criterion) {
 
 fn pass_two_specular_512(c: &mut Criterion) {
     let progress = Progress::hidden();
-    let overrides = Overrides { width: Some(512), height: Some(512), spp: Some(16), ..Default::default() };
-    let mut scene = cli::load_scene(&scene_path("cornell_specular.toml"), &overrides, &progress).unwrap();
+    let overrides =
+        Overrides { width_px: Some(512), height_px: Some(512), samples_per_pixel: Some(16), ..Default::default() };
+    let mut scene = run::load_scene(&scene_path("cornell_specular.toml"), &overrides, &progress).unwrap();
     let mut stats = RunStats::default();
-    let (mesh, solution) = cli::pass_one(&scene, None, &progress, &mut stats).unwrap();
+    let (mesh, solution) = run::pass_one(&scene, None, &progress, &mut stats).unwrap();
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let mut group = c.benchmark_group("pass two, cornell_specular 512x512 16 spp");
     group.sample_size(10);
@@ -51,9 +50,7 @@ fn pass_two_specular_512(c: &mut Criterion) {
     ] {
         scene.render.direct = direct;
         group.bench_function(name, |b| {
-            b.iter(|| {
-                black_box(pipeline::render(&scene, &mesh, &accel, &solution, mode, &progress, &mut stats).unwrap())
-            })
+            b.iter(|| black_box(run::render(&scene, &mesh, &accel, &solution, mode, &progress, &mut stats).unwrap()))
         });
     }
     group.finish();

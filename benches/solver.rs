@@ -3,6 +3,7 @@
 //! one progressive-refinement shot and selection, and full solves).
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{DVec3, Vec3};
+use radray::radiosity::solver::shooting::received_from_matrix;
 use radray::radiosity::solver::{self, brightest_unshot, diagonal, gauss_seidel_sweep, jacobi_row, shoot};
 use radray::radiosity::FormFactors;
 use radray::rng::Pcg32;
@@ -89,7 +90,7 @@ fn benches(c: &mut Criterion) {
         b.iter(|| {
             k = (k + 1) % ELEMENTS;
             unshot[k] = DVec3::ONE;
-            shoot(&received_by, k, &reflectance, &area, &mut shot_exitance, &mut unshot)
+            shoot(received_from_matrix(&received_by, k), k, &reflectance, &mut shot_exitance, &mut unshot)
         })
     });
     for (solver, name) in [

@@ -1,5 +1,5 @@
-//! The command line: subcommands and their flags (clap), validated into the stages' settings, and the
-//! runners that turn a command into files and an exit code.
+//! The command line: subcommands and their flags (clap), turned into `run::Job`s (a render or a solve
+//! is a batch of one) or a `batch::Settings`, and dispatched.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
@@ -55,45 +55,23 @@ pub enum Command {
     Info(InfoArgs),
 }
 
-/// What pass two draws.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Mode {
-    /// The two-pass image: radiosity diffuse term plus Whitted specular transport.
-    Final,
-    /// The pure radiosity output: first hit's interpolated radiosity / π.
-    Radiosity,
-    /// Both, as NAME.final.EXT and NAME.radiosity.EXT.
-    Both,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DirectArg {
     Radiosity,
     Pixel,
 }
 
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum QualityArg {
     Preview,
     Default,
     High,
 }
 
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ToneArg {
-    Clamp,
-    Reinhard,
-    Aces,
-}
-
-/// Settings that the command line (or a batch job) lays over the scene file's.
-#[derive(Args, Debug, Clone, Default, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Overrides {
+/// Settings that the command line lays over the scene file's (`scene::Overrides`), and the PNG
+/// encoding.
+#[derive(Args, Debug, Clone, Default)]
+pub struct OverrideArgs {
     /// Image width in pixels.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub width: Option<u32>,
@@ -117,7 +95,7 @@ pub struct Overrides {
     pub exposure: Option<f32>,
     /// PNG tone curve applied after the exposure.
     #[arg(long, value_enum)]
-    pub tone: Option<ToneArg>,
+    pub tone: Option<ToneCurve>,
 }
 
 #[derive(Args, Debug)]
@@ -136,7 +114,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub stats: Option<PathBuf>,
     #[command(flatten)]
-    pub overrides: Overrides,
+    pub overrides: OverrideArgs,
 }
 
 #[derive(Args, Debug)]
@@ -197,41 +175,14 @@ pub struct InfoArgs {
 }
 
 // ---------------------------------------------------------------------------------------------------
-// Runners
+// Dispatch
 
-use crate::accel::Accel;
+use crate::batch;
 use crate::compare;
 use crate::output::{self, ToneCurve};
-use crate::pipeline::{self, RunStats};
 use crate::progress::{Progress, Verbosity};
-use crate::radiosity::{solution, Solution};
-use crate::scene::{self, DirectMode, Quality, SceneDescription};
-use crate::trace::whitted::TraceMode;
-use anyhow::Context;
-use std::path::Path;
-
-/// A failed run: the error chain to print and the exit code (2: bad input or usage, 1: internal).
-#[derive(Debug)]
-pub struct Failure {
-    pub exit_code: i32,
-    pub error: anyhow::Error,
-}
-
-impl Failure {
-    pub fn input(error: impl Into<anyhow::Error>) -> Self {
-        Failure { exit_code: 2, error: error.into() }
-    }
-
-    pub fn internal(error: impl Into<anyhow::Error>) -> Self {
-        Failure { exit_code: 1, error: error.into() }
-    }
-}
-
-impl std::fmt::Display for Failure {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{:#}", self.error)
-    }
-}
+use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
+use crate::scene::{DirectMode, Overrides, Quality};
 
 impl From<QualityArg> for Quality {
     fn from(q: QualityArg) -> Self {
@@ -243,13 +194,32 @@ impl From<QualityArg> for Quality {
     }
 }
 
-impl From<ToneArg> for ToneCurve {
-    fn from(t: ToneArg) -> Self {
-        match t {
-            ToneArg::Clamp => ToneCurve::Clamp,
-            ToneArg::Reinhard => ToneCurve::Reinhard,
-            ToneArg::Aces => ToneCurve::Aces,
+impl From<DirectArg> for DirectMode {
+    fn from(d: DirectArg) -> Self {
+        match d {
+            DirectArg::Radiosity => DirectMode::Radiosity,
+            DirectArg::Pixel => DirectMode::Pixel,
         }
+    }
+}
+
+impl OverrideArgs {
+    /// The scene settings these flags override.
+    pub fn scene_overrides(&self) -> Overrides {
+        Overrides {
+            width_px: self.width,
+            height_px: self.height,
+            samples_per_pixel: self.spp,
+            seed: self.seed,
+            direct: self.direct.map(Into::into),
+            quality: self.quality.map(Into::into),
+            ..Default::default()
+        }
+    }
+
+    /// How PNGs are encoded.
+    pub fn png(&self) -> PngSettings {
+        PngSettings { exposure_stops: self.exposure.unwrap_or(0.0), tone: self.tone.unwrap_or_default() }
     }
 }
 
@@ -271,211 +241,55 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Render(args) => render_command(&args, &progress),
         Command::Solve(args) => solve_command(&args, &progress),
         Command::Compare(args) => compare_command(&args),
-        Command::Batch(args) => crate::batch::run(&args, &progress),
+        Command::Batch(args) => {
+            batch::run(&batch::Settings { jobs: args.jobs, manifest: args.manifest, shard: args.shard }, &progress)
+        }
         Command::Info(args) => info_command(&args),
     })
 }
 
-/// Loads a scene, prints its warnings, and lays the overrides over it.
-pub fn load_scene(path: &Path, overrides: &Overrides, progress: &Progress) -> Result<SceneDescription, Failure> {
-    let mut scene = scene::load(path).map_err(Failure::input)?;
-    for w in &scene.warnings {
-        progress.note(&format!("warning: {w}"));
-    }
-    apply_overrides(&mut scene, overrides);
-    Ok(scene)
-}
-
-/// Lays command-line (or batch job) settings over a scene's: the preset first, then single values.
-pub fn apply_overrides(scene: &mut SceneDescription, o: &Overrides) {
-    if let Some(q) = o.quality {
-        scene.apply_quality(q.into());
-    }
-    if let Some(w) = o.width {
-        scene.image.width_px = w;
-    }
-    if let Some(h) = o.height {
-        scene.image.height_px = h;
-    }
-    if let Some(spp) = o.spp {
-        scene.image.samples_per_pixel = spp;
-        scene.image.adaptive_max_samples = scene.image.adaptive_max_samples.max(spp);
-    }
-    if let Some(seed) = o.seed {
-        scene.image.seed = seed;
-        scene.radiosity.seed = seed;
-    }
-    if let Some(d) = o.direct {
-        scene.render.direct = match d {
-            DirectArg::Radiosity => DirectMode::Radiosity,
-            DirectArg::Pixel => DirectMode::Pixel,
-        };
-    }
-}
-
-/// The files a render writes: `-o` as given, or NAME.final.EXT and NAME.radiosity.EXT for `both`.
-pub fn output_plan(outputs: &[PathBuf], mode: Mode) -> Result<Vec<(TraceMode, PathBuf)>, Failure> {
-    let mut plan = Vec::new();
-    for out in outputs {
-        let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-        if ext != "png" && ext != "exr" {
-            return Err(Failure::input(anyhow::anyhow!("{}: output must end in .png or .exr", out.display())));
-        }
-        let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        if !dir.is_dir() {
-            return Err(Failure::input(anyhow::anyhow!(
-                "{}: directory {} does not exist",
-                out.display(),
-                dir.display()
-            )));
-        }
-        let tagged = |tag: &str| {
-            let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-            out.with_file_name(format!("{stem}.{tag}.{ext}"))
-        };
-        match mode {
-            Mode::Final => plan.push((TraceMode::Final, out.clone())),
-            Mode::Radiosity => plan.push((TraceMode::Radiosity, out.clone())),
-            Mode::Both => {
-                plan.push((TraceMode::Final, tagged("final")));
-                plan.push((TraceMode::Radiosity, tagged("radiosity")));
-            }
-        }
-    }
-    Ok(plan)
-}
-
-/// Pass one for a scene: mesh, form factors and solution (or a loaded solution).
-pub fn pass_one(
-    scene: &SceneDescription,
-    solution_file: Option<&Path>,
-    progress: &Progress,
-    stats: &mut RunStats,
-) -> Result<(crate::mesh::Mesh, Solution), Failure> {
-    let mesh = pipeline::build_mesh(scene, progress).map_err(Failure::input)?;
-    stats.elements = mesh.elements.len();
-    if let Some(path) = solution_file {
-        let solution = Solution::load(path, solution::fingerprint(&mesh, &scene.materials)).map_err(Failure::input)?;
-        return Ok((mesh, solution));
-    }
-    if !scene.has_emitter() {
-        let black = Solution::black(&mesh, &scene.materials);
-        return Ok((mesh, black));
-    }
-    if !scene.radiosity.store_form_factors {
-        let accel = pipeline::specular_accel(scene, &mesh);
-        let solution = pipeline::solve_matrix_free(scene, &mesh, accel.as_ref(), progress, stats);
-        return Ok((mesh, solution));
-    }
-    pipeline::check_memory(scene, &mesh).map_err(Failure::input)?;
-    let accel = pipeline::specular_accel(scene, &mesh);
-    let ff = pipeline::compute_form_factors(scene, &mesh, accel.as_ref(), progress, stats);
-    let solution = pipeline::solve(scene, &mesh, &ff, progress, stats);
-    Ok((mesh, solution))
-}
-
-/// Writes an image as PNG or EXR by its extension.
-pub fn write_image(image: &crate::film::Image, path: &Path, overrides: &Overrides) -> Result<(), Failure> {
-    let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let result = if is_exr {
-        output::write_exr(image, path)
-    } else {
-        output::write_png(
-            image,
-            path,
-            overrides.exposure.unwrap_or(0.0),
-            overrides.tone.map(Into::into).unwrap_or(ToneCurve::Clamp),
-        )
-    };
-    result.map_err(Failure::input)
-}
-
-/// Renders every planned output of one scene.
-pub fn render_scene(
-    scene: &SceneDescription,
-    mesh: &crate::mesh::Mesh,
-    solution: &Solution,
-    plan: &[(TraceMode, PathBuf)],
-    overrides: &Overrides,
-    progress: &Progress,
-    stats: &mut RunStats,
-) -> Result<Vec<PathBuf>, Failure> {
-    let accel = Accel::build(&mesh.positions, &mesh.triangles);
-    let mut written = Vec::new();
-    let mut rendered: Vec<(TraceMode, crate::film::Image)> = Vec::new();
-    for (mode, path) in plan {
-        if !rendered.iter().any(|(m, _)| m == mode) {
-            let image =
-                pipeline::render(scene, mesh, &accel, solution, *mode, progress, stats).map_err(Failure::internal)?;
-            rendered.push((*mode, image));
-        }
-        let image = &rendered
-            .iter()
-            .find(|(m, _)| m == mode)
-            .map(|(_, i)| i)
-            .ok_or_else(|| Failure::internal(anyhow::anyhow!("image missing")))?;
-        write_image(image, path, overrides)?;
-        written.push(path.clone());
-    }
-    Ok(written)
-}
-
-fn write_stats(path: Option<&PathBuf>, stats: &mut RunStats) -> Result<(), Failure> {
-    let Some(path) = path else { return Ok(()) };
-    stats.peak_memory_bytes = pipeline::peak_memory_bytes();
-    let text = serde_json::to_string_pretty(stats).map_err(Failure::internal)?;
-    output::write_atomically(path, text.as_bytes())
-        .with_context(|| format!("{}: cannot write stats", path.display()))
-        .map_err(Failure::input)
-}
-
 fn render_command(args: &RenderArgs, progress: &Progress) -> Result<(), Failure> {
-    let plan = output_plan(&args.output, args.mode)?;
-    let scene = load_scene(&args.scene, &args.overrides, progress)?;
-    let mut stats = RunStats::default();
-    let (mesh, solution) = pass_one(&scene, args.solution.as_deref(), progress, &mut stats)?;
-    let written = render_scene(&scene, &mesh, &solution, &plan, &args.overrides, progress, &mut stats)?;
-    for path in written {
+    let plan = run::output_plan(&args.output, args.mode)?;
+    let job = Job {
+        scene: args.scene.clone(),
+        overrides: args.overrides.scene_overrides(),
+        work: Work::Render { plan, png: args.overrides.png(), solution: args.solution.clone() },
+    };
+    let mut outcome = Outcome::default();
+    Runner::single().run(&job, progress, &mut outcome)?;
+    for path in &outcome.written {
         if progress.verbosity() == Verbosity::Verbose {
             eprintln!("wrote {}", path.display());
         }
     }
-    write_stats(args.stats.as_ref(), &mut stats)
+    run::write_stats(args.stats.as_deref(), &mut outcome.stats)
 }
 
 fn solve_command(args: &SolveArgs, progress: &Progress) -> Result<(), Failure> {
-    let overrides = Overrides { seed: args.seed, quality: args.quality, ..Default::default() };
-    let dir = args.output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    if !dir.is_dir() {
-        return Err(Failure::input(anyhow::anyhow!(
-            "{}: directory {} does not exist",
-            args.output.display(),
-            dir.display()
-        )));
-    }
-    let scene = load_scene(&args.scene, &overrides, progress)?;
-    let mut stats = RunStats::default();
-    let (_mesh, solution) = pass_one(&scene, None, progress, &mut stats)?;
-    solution.save(&args.output).map_err(Failure::input)?;
-    write_stats(args.stats.as_ref(), &mut stats)
+    run::check_output_directory(&args.output)?;
+    let overrides = Overrides { seed: args.seed, quality: args.quality.map(Into::into), ..Default::default() };
+    let job = Job { scene: args.scene.clone(), overrides, work: Work::Solve { output: args.output.clone() } };
+    let mut outcome = Outcome::default();
+    Runner::single().run(&job, progress, &mut outcome)?;
+    run::write_stats(args.stats.as_deref(), &mut outcome.stats)
 }
 
 fn compare_command(args: &CompareArgs) -> Result<(), Failure> {
-    let a = output::read_image(&args.a).map_err(Failure::input)?;
-    let b = output::read_image(&args.b).map_err(Failure::input)?;
-    let metrics = compare::metrics(&a, &b, None).map_err(Failure::input)?;
-    let neutral = Overrides::default();
+    let a = output::read_image(&args.a)?;
+    let b = output::read_image(&args.b)?;
+    let metrics = compare::metrics(&a, &b, None)?;
+    let neutral = PngSettings::default();
     if args.diff.is_some() || args.side_by_side.is_some() {
-        let diff = compare::difference_image(&a, &b).map_err(Failure::input)?;
+        let diff = compare::difference_image(&a, &b)?;
         if let Some(path) = &args.diff {
-            write_image(&diff, path, &neutral)?;
+            run::write_image(&diff, path, &neutral)?;
         }
         if let Some(path) = &args.side_by_side {
-            write_image(&compare::side_by_side(&[&a, &b, &diff]), path, &neutral)?;
+            run::write_image(&compare::side_by_side(&[&a, &b, &diff]), path, &neutral)?;
         }
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&metrics).map_err(Failure::internal)?);
+        println!("{}", serde_json::to_string_pretty(&metrics)?);
     } else {
         let at = &metrics.max_abs_diff_at;
         println!("pixels            {}", metrics.pixels);
@@ -490,11 +304,11 @@ fn compare_command(args: &CompareArgs) -> Result<(), Failure> {
 }
 
 fn info_command(args: &InfoArgs) -> Result<(), Failure> {
-    let overrides = Overrides { quality: args.quality, ..Default::default() };
-    let scene = load_scene(&args.scene, &overrides, &Progress::hidden())?;
+    let overrides = Overrides { quality: args.quality.map(Into::into), ..Default::default() };
+    let scene = run::load_scene(&args.scene, &overrides, &Progress::hidden())?;
     let report = crate::info::describe(&scene);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report).map_err(Failure::internal)?);
+        println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print!("{report}");
     }

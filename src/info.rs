@@ -65,7 +65,7 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
     }
     // Meshing is cheap (milliseconds for 10⁵ elements), so the estimate uses the real mesh unless the
     // element count is beyond what radray would mesh at all.
-    let (bytes, seconds) = if elements <= crate::pipeline::MAX_ELEMENTS {
+    let (bytes, seconds) = if elements <= crate::run::MAX_ELEMENTS {
         let mesh = mesh::Mesh::build(scene, p.max_element_edge);
         let e = form_factors::estimate(&mesh, p);
         (e.matrix_bytes, e.seconds)

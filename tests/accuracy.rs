@@ -3,11 +3,11 @@
 //! the metrics of `references/compare.py`. On failure the test writes the image and a difference
 //! image to `target/accuracy/`.
 
-use radray::cli::{self, Overrides};
 use radray::compare;
 use radray::film::Image;
-use radray::pipeline::{self, RunStats};
 use radray::progress::Progress;
+use radray::run::{self, RunStats};
+use radray::scene::Overrides;
 use radray::scene::{DirectMode, FilterKind, SceneDescription};
 use radray::trace::TraceMode;
 use std::path::{Path, PathBuf};
@@ -18,7 +18,7 @@ fn root() -> &'static Path {
 
 fn load(scene: &str) -> SceneDescription {
     let progress = Progress::hidden();
-    let mut s = cli::load_scene(&root().join("scenes").join(scene), &Overrides::default(), &progress).unwrap();
+    let mut s = run::load_scene(&root().join("scenes").join(scene), &Overrides::default(), &progress).unwrap();
     // The references use a box filter over each pixel at 256×256.
     s.image.width_px = 256;
     s.image.height_px = 256;
@@ -31,12 +31,9 @@ fn load(scene: &str) -> SceneDescription {
 fn render(scene: &SceneDescription, modes: &[TraceMode]) -> Vec<Image> {
     let progress = Progress::hidden();
     let mut stats = RunStats::default();
-    let (mesh, solution) = cli::pass_one(scene, None, &progress, &mut stats).unwrap();
+    let (mesh, solution) = run::pass_one(scene, None, &progress, &mut stats).unwrap();
     let accel = radray::accel::Accel::build(&mesh.positions, &mesh.triangles);
-    modes
-        .iter()
-        .map(|&m| pipeline::render(scene, &mesh, &accel, &solution, m, &progress, &mut stats).unwrap())
-        .collect()
+    modes.iter().map(|&m| run::render(scene, &mesh, &accel, &solution, m, &progress, &mut stats).unwrap()).collect()
 }
 
 fn reference(name: &str) -> Image {

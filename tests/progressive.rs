@@ -7,7 +7,7 @@ use std::path::Path;
 
 use glam::DVec3;
 use radray::mesh::Mesh;
-use radray::radiosity::{form_factors, progressive, solver, FormFactors};
+use radray::radiosity::{form_factors, matrix_free, solver, FormFactors};
 use radray::scene::{self, RadiosityParams, SceneDescription, SolverKind};
 
 /// A closed unit cube seen from inside, its walls grey (ρ = 0.5) and emitting `wall_ke`, meshed 4 × 4
@@ -86,7 +86,7 @@ fn matrix_free_shooting_solves_the_reciprocal_system() {
     let scene = cube(Some(5.0), 0.0);
     let mesh = Mesh::build(&scene, scene.radiosity.max_element_edge);
     let e = &mesh.elements;
-    let solved = progressive::solve(&mesh, &scene.radiosity, None, &mut |_, _| {});
+    let solved = matrix_free::solve(&mesh, &scene.radiosity, None, &mut |_, _| {});
     assert!(solved.stats.converged, "{} shots", solved.stats.iterations);
     println!("{} elements, {} shots to unshot fraction 1e-9", e.len(), solved.stats.iterations);
 
@@ -125,7 +125,7 @@ fn matrix_free_furnace_is_within_its_reciprocity_bound() {
     let rho = 0.5;
     let bound = rho * epsilon / (1.0 - rho * (1.0 + epsilon)) + 1e-6;
 
-    let solved = progressive::solve(&mesh, &scene.radiosity, None, &mut |_, _| {});
+    let solved = matrix_free::solve(&mesh, &scene.radiosity, None, &mut |_, _| {});
     let exact = std::f64::consts::PI / (1.0 - rho);
     let worst = solved.exitance.iter().map(|b| (b.max_element() - exact).abs().max((b.min_element() - exact).abs()));
     let worst = worst.fold(0.0, f64::max) / exact;
@@ -145,7 +145,7 @@ fn matrix_free_result_is_independent_of_thread_count() {
     let params = RadiosityParams { tolerance: 1e-3, ..scene.radiosity.clone() };
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| progressive::solve(&mesh, &params, None, &mut |_, _| {}))
+        pool.install(|| matrix_free::solve(&mesh, &params, None, &mut |_, _| {}))
     };
     let (one, two) = (run(1), run(2));
     assert_eq!(one.exitance, two.exitance);
@@ -160,11 +160,11 @@ fn matrix_free_result_is_independent_of_thread_count() {
 fn early_stop_keeps_the_direct_part_and_adds_the_ambient_term() {
     let scene = cube(Some(5.0), 0.0);
     let mesh = Mesh::build(&scene, scene.radiosity.max_element_edge);
-    let converged = progressive::solve(&mesh, &scene.radiosity, None, &mut |_, _| {});
+    let converged = matrix_free::solve(&mesh, &scene.radiosity, None, &mut |_, _| {});
     let brightest = converged.exitance.iter().map(|b| b.max_element()).fold(0.0, f64::max);
     assert!(converged.ambient_exitance.max_element() < 1e-8 * brightest, "converged: almost nothing unshot");
     let early_params = RadiosityParams { max_iterations: 1, ..scene.radiosity.clone() };
-    let early = progressive::solve(&mesh, &early_params, None, &mut |_, _| {});
+    let early = matrix_free::solve(&mesh, &early_params, None, &mut |_, _| {});
     assert!(!early.stats.converged && early.stats.iterations == mesh.elements.len() as u32);
     let difference = max_relative_difference(&early.direct_exitance, &converged.direct_exitance);
     assert!(difference < 1e-6, "the direct part does not wait for convergence: {difference:e}");

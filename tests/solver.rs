@@ -10,7 +10,8 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 use radray::mesh::Mesh;
-use radray::radiosity::solution::{fingerprint, SolutionFileError, FILE_MAGIC, FILE_VERSION};
+use radray::radiosity::fingerprint::fingerprint;
+use radray::radiosity::solution_file::{SolutionFileError, FILE_MAGIC, FILE_VERSION};
 use radray::radiosity::solver::{self, Shooter};
 use radray::radiosity::{FormFactors, Solution};
 use radray::scene::{Material, RadiosityParams, SceneDescription, SolverKind, Surface};
@@ -69,7 +70,7 @@ struct System {
 }
 
 impl System {
-    fn solve(&self, p: &RadiosityParams) -> (Vec<DVec3>, radray::radiosity::solution::SolveStats) {
+    fn solve(&self, p: &RadiosityParams) -> (Vec<DVec3>, radray::radiosity::SolveStats) {
         solver::solve_f64(&self.ff, &self.reflectance, &self.emission, &self.area, p, &mut |_, _| {})
     }
 
@@ -356,7 +357,7 @@ fn cornell_mesh() -> (SceneDescription, Mesh, System) {
 fn direct_part_is_first_bounce() {
     let (scene, mesh, system) = cornell_mesh();
     let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
-    let solution = Solution::compute(&mesh, &scene.materials, &system.ff, &gauss_seidel, &mut |_, _| {});
+    let solution = solver::solve_solution(&mesh, &scene.materials, &system.ff, &gauss_seidel, &mut |_, _| {});
     // One Jacobi sweep from B = E is E + ρFE: the first bounce plus the emission.
     let one_bounce = RadiosityParams { max_iterations: 1, ..params(SolverKind::Jacobi, 0.0) };
     let (b1, _) = system.solve(&one_bounce);
@@ -418,7 +419,7 @@ fn progressive_ambient_term_makes_partial_solution_closer() {
 fn solved_cornell() -> (SceneDescription, Mesh, Solution) {
     let (scene, mesh, system) = cornell_mesh();
     let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
-    let solution = Solution::compute(&mesh, &scene.materials, &system.ff, &gauss_seidel, &mut |_, _| {});
+    let solution = solver::solve_solution(&mesh, &scene.materials, &system.ff, &gauss_seidel, &mut |_, _| {});
     (scene, mesh, solution)
 }
 
@@ -537,7 +538,8 @@ fn scene_without_emitter_solves_to_black() {
     assert_eq!(black.mesh_fingerprint, fingerprint(&dark, &scene.materials));
     assert!(black.stats.converged);
     for solver in ALL_SOLVERS {
-        let computed = Solution::compute(&dark, &scene.materials, &system.ff, &params(solver, 1e-6), &mut |_, _| {});
+        let computed =
+            solver::solve_solution(&dark, &scene.materials, &system.ff, &params(solver, 1e-6), &mut |_, _| {});
         assert!(computed.stats.converged, "{solver:?}");
         assert_eq!(computed.element_exitance, black.element_exitance);
         assert_eq!(computed.vertex_exitance, black.vertex_exitance);

@@ -1,14 +1,22 @@
 //! Pass one: view-independent diffuse radiosity. Form factors by the hemicube (Cohen and Greenberg
-//! 1985), the system B = E + ρ·F·B solved by Gauss-Seidel with overrelaxation, Jacobi or progressive
-//! refinement (with a stored matrix, or matrix-free in `progressive`), and the immutable `Solution`
-//! that pass two reads.
+//! 1985), the system B = E + ρ·F·B solved by one of the pass-one methods (`method`): Gauss-Seidel
+//! with overrelaxation, Jacobi or progressive refinement over a stored matrix (`matrix`, `solver`), or
+//! progressive refinement without one (`matrix_free`). The result is the immutable `Solution` that
+//! pass two reads.
 
-pub mod form_factors;
+pub mod fingerprint;
 pub mod hemicube;
-pub mod progressive;
+pub mod matrix;
+pub mod matrix_free;
+pub mod method;
 pub mod solution;
+pub mod solution_file;
 pub mod solver;
 pub mod specular;
+pub mod stats;
 
-pub use form_factors::FormFactors;
+pub use matrix::form_factors;
+pub use matrix::FormFactors;
+pub use method::{PassOne, PassOneMethod};
 pub use solution::Solution;
+pub use stats::{PassOneStats, SolveStats};

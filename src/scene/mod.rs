@@ -4,6 +4,7 @@
 pub mod instance;
 pub mod lint;
 pub mod obj;
+pub mod overrides;
 pub mod parse;
 pub mod shapes;
 pub mod validate;
@@ -11,6 +12,7 @@ pub mod validate;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
+pub use overrides::Overrides;
 pub use parse::{load, parse_str, SceneError};
 pub use validate::{check_camera, check_material};
 

@@ -6,11 +6,9 @@
 use super::instance::Placement;
 use super::obj::{self, ObjError};
 use super::shapes::{box_faces, normalise_surfaces, sphere_triangles};
-use super::validate::{CameraField, MaterialField};
+use super::validate::{check_material, CameraField, MaterialField};
 use super::*;
 
-/// The old path of [`super::check_material`], still used by `batch.rs`; prefer `scene::check_material`.
-pub use super::validate::check_material;
 use serde::Deserialize;
 use toml::Spanned;
 

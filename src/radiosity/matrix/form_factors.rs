@@ -7,9 +7,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
-use super::hemicube::{Hemicube, HemicubeFrame, ItemBuffer};
-use super::specular::{SpecularPaths, SpecularStats};
 use crate::mesh::Mesh;
+use crate::radiosity::hemicube::{Hemicube, HemicubeFrame, ItemBuffer};
+use crate::radiosity::specular::{SpecularPaths, SpecularStats};
 use crate::scene::RadiosityParams;
 
 /// Sparse form factors F_ij (compressed sparse rows).
@@ -418,16 +418,14 @@ pub struct FormFactorEstimate {
     pub threads: usize,
 }
 
-/// Predicts the matrix size and the time of `compute` from element count and hemicube resolution.
+/// Predicts the matrix size and the time of `compute` from element count n and hemicube resolution N:
 ///
-/// Model (fitted on the Cornell box at 5k and 10k elements, N = 32 and 256, release build on this
-/// project's 2-core machine): each row stores about min(n/2, 0.85·N²) entries (an interior element
-/// sees roughly half of the others, and a hemicube resolves at most a fraction of its 3N² pixels into
-/// distinct items: 28% at 40k elements and N = 128, where rows held 13.5k entries, docs/performance.md);
-/// a hemicube costs ≈ (93 + 0.81·N) ns per element considered (set-up plus one span
-/// per covered row) plus ≈ 1.85 ns per hemicube pixel (clear, depth test, accumulate): the earlier fit
-/// scaled by the measured 0.74 of CPU time at 10k elements, N = 256, after per-vertex transforms and
-/// run-length accumulation (39.5 → 29.4 user-s). A rough guide (±50 %), not a bound.
+/// entries per row ≈ min(n/2, 0.85·N²),   time per hemicube ≈ (93 + 0.81·N) ns · n + 1.85 ns · 3N²
+///
+/// (an interior element sees roughly half of the others, and a hemicube resolves at most a fraction of
+/// its 3N² pixels into distinct items; the cost is set-up plus one span per covered row per element
+/// considered, plus clear, depth test and accumulation per pixel). The constants are fitted on the
+/// Cornell box; their measurements are in docs/performance.md. A rough guide (±50 %), not a bound.
 pub fn estimate(mesh: &Mesh, params: &RadiosityParams) -> FormFactorEstimate {
     let n = mesh.elements.len();
     let rows = (0..n).filter(|&i| needs_row(mesh, i)).count();

@@ -7,13 +7,13 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::form_factors::{needs_row, ElementHierarchy};
 use super::hemicube::{Hemicube, ItemBuffer};
-use super::solution::SolveStats;
-use super::solver::ambient_exitance;
+use super::matrix::form_factors::{needs_row, ElementHierarchy};
+use super::solver::shooting::{received_by_reciprocity, Shooting, ShotCount};
 use super::specular::SpecularPaths;
+use super::stats::SolveStats;
 use crate::mesh::Mesh;
-use crate::scene::{RadiosityParams, SolverKind};
+use crate::scene::RadiosityParams;
 
 /// Shooters whose hemicubes are rasterised together (in parallel), then shot one after another, each
 /// with the unshot exitance it has at its turn. A constant, so the result does not depend on the
@@ -52,30 +52,6 @@ pub fn brightest_unshot_batch(area: &[f64], unshot_exitance: &[DVec3]) -> Vec<us
         best.truncate(SHOT_BATCH);
     }
     best.into_iter().map(|(_, i)| i).collect()
-}
-
-/// Distributes one shot: ΔB_i is zeroed, then every element j in i's row receives
-///
-/// ΔB_j += ρ_j ΔB_i F_ij A_i / A_j   (reciprocity: F_ji A_j = F_ij A_i),
-///
-/// added to both B_j and the unshot ΔB_j.
-pub fn shoot_by_reciprocity(
-    row: &[(u32, f32)],
-    shooter: usize,
-    reflectance: &[DVec3],
-    area: &[f64],
-    exitance: &mut [DVec3],
-    unshot_exitance: &mut [DVec3],
-) {
-    let shot = unshot_exitance[shooter];
-    unshot_exitance[shooter] = DVec3::ZERO;
-    let shooter_area = area[shooter];
-    for &(j, f) in row {
-        let j = j as usize;
-        let received = reflectance[j] * shot * (f as f64 * shooter_area / area[j]);
-        exitance[j] += received;
-        unshot_exitance[j] += received;
-    }
 }
 
 /// Solves B = E + ρ·F·B by progressive refinement with every row computed when its element shoots
@@ -118,10 +94,8 @@ pub fn solve(
         shooters.par_iter().map_init(|| ItemBuffer::new(&hc), |buffers, &i| row_of(buffers, i)).collect()
     };
 
-    let mut exitance = emission.clone();
-    let mut unshot = emission.clone();
-    let mut direct = vec![DVec3::ZERO; n];
     // Emitters whose emission has gone into `direct` (at their first shot).
+    let mut direct = vec![DVec3::ZERO; n];
     let mut direct_done: Vec<bool> = emission.iter().map(|x| x.max_element() <= 0.0).collect();
     let add_direct = |direct: &mut [DVec3], i: usize, plain_row: &[(u32, f32)]| {
         for &(j, f) in plain_row {
@@ -129,21 +103,12 @@ pub fn solve(
             direct[j] += reflectance[j] * emission[i] * (f as f64 * area[i] / area[j]);
         }
     };
-    let power = |unshot: &[DVec3]| unshot.iter().zip(&area).fold(DVec3::ZERO, |s, (&db, &a)| s + db * a);
-    let emitted_power = power(&emission);
-    let unshot_fraction = |unshot: &[DVec3]| {
-        let left = power(unshot);
-        (0..3).filter(|&c| emitted_power[c] > 0.0).map(|c| left[c] / emitted_power[c]).fold(0.0, f64::max)
-    };
-
-    let max_shots = (params.max_iterations as u64).saturating_mul(n as u64).min(u32::MAX as u64) as u32;
-    let mut stats =
-        SolveStats { solver: SolverKind::Progressive, iterations: 0, residual_history: Vec::new(), converged: false };
-    stats.converged = unshot_fraction(&unshot) < params.tolerance;
-    'solve: while !stats.converged && stats.iterations < max_shots {
-        let shooters = brightest_unshot_batch(&area, &unshot);
+    let mut state = Shooting::new(reflectance.clone(), area.clone(), emission.clone());
+    let mut count = ShotCount::new(params, n, state.unshot_fraction());
+    'solve: while count.goes_on() {
+        let shooters = brightest_unshot_batch(&area, state.unshot_exitance());
         if shooters.is_empty() {
-            stats.converged = true;
+            count.nothing_left();
             break;
         }
         for (&i, (row, plain)) in shooters.iter().zip(rows_of(&shooters)) {
@@ -151,19 +116,8 @@ pub fn solve(
                 add_direct(&mut direct, i, &row[..plain]);
                 direct_done[i] = true;
             }
-            shoot_by_reciprocity(&row, i, &reflectance, &area, &mut exitance, &mut unshot);
-            stats.iterations += 1;
-            let measure = unshot_fraction(&unshot);
-            if !measure.is_finite() {
-                break 'solve;
-            }
-            stats.residual_history.push(measure);
-            on_shot(stats.iterations, measure);
-            if measure < params.tolerance {
-                stats.converged = true;
-                break 'solve;
-            }
-            if stats.iterations >= max_shots {
+            state.shoot(i, received_by_reciprocity(&row, i, &area));
+            if !count.record(state.unshot_fraction(), on_shot) {
                 break 'solve;
             }
         }
@@ -174,9 +128,9 @@ pub fn solve(
         add_direct(&mut direct, i, &row[..plain]);
     }
 
-    let ambient = ambient_exitance(&reflectance, &area, &unshot);
-    let exitance = exitance.iter().zip(&reflectance).map(|(&b, &rho)| b + rho * ambient).collect();
-    MatrixFreeSolution { exitance, direct_exitance: direct, ambient_exitance: ambient, stats }
+    let ambient = state.ambient_exitance();
+    let exitance = state.exitance_with_ambient();
+    MatrixFreeSolution { exitance, direct_exitance: direct, ambient_exitance: ambient, stats: count.into_stats() }
 }
 
 #[cfg(test)]
@@ -211,7 +165,13 @@ mod tests {
         let area = vec![2.0, 1.0, 4.0];
         let mut exitance = vec![DVec3::new(3.0, 2.0, 1.0), DVec3::ZERO, DVec3::ZERO];
         let mut unshot = exitance.clone();
-        shoot_by_reciprocity(&row, 0, &reflectance, &area, &mut exitance, &mut unshot);
+        crate::radiosity::solver::shoot(
+            received_by_reciprocity(&row, 0, &area),
+            0,
+            &reflectance,
+            &mut exitance,
+            &mut unshot,
+        );
         assert_eq!(unshot[0], DVec3::ZERO);
         let received = unshot[1] * area[1] + unshot[2] * area[2];
         let expected = DVec3::new(3.0, 2.0, 1.0) * 2.0 * 0.75;

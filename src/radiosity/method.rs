@@ -1,0 +1,335 @@
+//! The pass-one interface: every way of solving B = E + ρ·F·B is a `PassOneMethod`, which takes the
+//! scene and its mesh and returns the mesh (a hierarchical method may refine it), the `Solution` and
+//! what it measured. Each method owns its memory check and the keys under which a batch may reuse
+//! its work; `for_params` picks the scene's method.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::fingerprint;
+use super::matrix::{form_factors, FormFactors};
+use super::matrix_free;
+use super::solution::Solution;
+use super::solver;
+use super::specular::{self, SpecularPaths};
+use super::stats::PassOneStats;
+use crate::accel::Accel;
+use crate::mesh::Mesh;
+use crate::progress::Progress;
+use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
+
+/// Why a method refuses a scene (before anything large is allocated).
+#[derive(Debug, thiserror::Error)]
+pub enum MethodError {
+    #[error("{scene}: the form factors of {elements} elements at hemicube resolution {resolution} would need about {needed_gib:.1} GiB, but about {available_gib:.1} GiB is available; use a larger max_element_edge (memory grows with the square of the element count), a lower hemicube_resolution, or solver = \"progressive\" with store_form_factors = false (no stored matrix: O(n) memory, one hemicube per shot; pair it with a looser tolerance such as 1e-2)")]
+    OutOfMemory { scene: String, elements: usize, resolution: u32, needed_gib: f64, available_gib: f64 },
+}
+
+/// What pass one made: the mesh the solution belongs to, the solution, and what was measured.
+#[derive(Debug)]
+pub struct PassOne {
+    pub mesh: Mesh,
+    pub solution: Solution,
+    pub stats: PassOneStats,
+    /// Whether the form factors came from an earlier job (`Reuse`).
+    pub reused_form_factors: bool,
+}
+
+/// Work that later jobs of a batch may reuse, keyed by what it depends on
+/// (`fingerprint::form_factor_key`). `Reuse::none()` keeps nothing, for a single run.
+#[derive(Debug, Default)]
+pub struct Reuse {
+    keep: bool,
+    /// The most recent scene's form factors only: matrices are large.
+    form_factors: Option<(u64, Arc<FormFactors>)>,
+}
+
+impl Reuse {
+    /// Keeps nothing: a single run frees its matrix as soon as it is solved.
+    pub fn none() -> Self {
+        Reuse { keep: false, form_factors: None }
+    }
+
+    /// Keeps the last scene's form factors for the jobs after it.
+    pub fn across_jobs() -> Self {
+        Reuse { keep: true, form_factors: None }
+    }
+}
+
+/// One way of running pass one.
+pub trait PassOneMethod {
+    /// The name reported in statistics.
+    fn name(&self) -> String;
+
+    /// Refuses a scene whose working memory could not fit, before it is allocated.
+    fn check_memory(&self, scene: &SceneDescription, mesh: &Mesh) -> Result<(), MethodError>;
+
+    /// Everything the solution depends on: equal keys give equal solutions, so a batch may share one.
+    fn solution_key(&self, scene: &SceneDescription, mesh: &Mesh) -> u64 {
+        fingerprint::solution_key(mesh, &scene.materials, &scene.radiosity)
+    }
+
+    /// Solves the scene's radiosity on `mesh` (of `scene`, with emitters), reusing and leaving in
+    /// `reuse` what later jobs may share.
+    fn solve(
+        &self,
+        scene: &SceneDescription,
+        mesh: Mesh,
+        reuse: &mut Reuse,
+        progress: &Progress,
+    ) -> Result<PassOne, MethodError>;
+}
+
+/// The scene's method: matrix-free shooting when `store_form_factors = false`, else the stored matrix
+/// with the scene's solver.
+pub fn for_params(params: &RadiosityParams) -> Box<dyn PassOneMethod> {
+    if params.store_form_factors {
+        Box::new(FullMatrix { solver: params.solver })
+    } else {
+        Box::new(MatrixFree)
+    }
+}
+
+/// Bytes the form-factor matrix may take at most: each stored row holds at most one entry per other
+/// element and at most one per hemicube pixel (3N² pixels), 8 bytes per entry.
+pub fn form_factor_bytes_bound(mesh: &Mesh, params: &RadiosityParams) -> u64 {
+    let n = mesh.elements.len() as u64;
+    let pixels = 3 * (params.hemicube_resolution_px as u64).pow(2);
+    let rows = (0..mesh.elements.len())
+        .filter(|&i| mesh.elements.reflectance[i].max_element() > 0.0 || mesh.elements.emission[i].max_element() > 0.0)
+        .count() as u64;
+    rows * n.min(pixels) * 8
+}
+
+/// Memory the system says is available (Linux `MemAvailable`), if known.
+pub fn available_memory_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// The ray accelerator pass one needs to follow light through mirrors and glass: built only when
+/// some element of the mesh is specular (`None` otherwise, and the form factors are plain).
+pub fn specular_accel(scene: &SceneDescription, mesh: &Mesh) -> Option<Accel> {
+    specular::mesh_has_specular(mesh, &scene.materials).then(|| Accel::build(&mesh.positions, &mesh.triangles))
+}
+
+/// How every method follows light through the scene's mirrors and glass: with the surfaces' shading
+/// normals, and with the photons traced from the emitters (in parallel) for the light paths.
+pub fn specular_paths<'a>(scene: &'a SceneDescription, mesh: &'a Mesh, accel: &'a Accel) -> SpecularPaths<'a> {
+    SpecularPaths::new(mesh, accel, &scene.materials)
+        .with_shading_normals(&scene.surfaces)
+        .with_light_paths(|count, trace| (0..count).into_par_iter().map(trace).collect())
+}
+
+/// Today's full matrix: hemicube form factors of every element stored as sparse rows (extended
+/// through mirrors and glass), then solved by Gauss-Seidel/SOR, Jacobi or shooting
+/// (`solver::solve_f64`). The form factors depend on geometry only, so a batch job that changes only
+/// materials re-solves from the previous job's matrix.
+#[derive(Clone, Copy, Debug)]
+pub struct FullMatrix {
+    pub solver: SolverKind,
+}
+
+impl FullMatrix {
+    /// Hemicube form factors of every element (rows only where an element reflects or emits),
+    /// extended through the scene's specular surfaces when it has any.
+    fn compute_form_factors(
+        &self,
+        scene: &SceneDescription,
+        mesh: &Mesh,
+        progress: &Progress,
+        stats: &mut PassOneStats,
+    ) -> FormFactors {
+        let params = &scene.radiosity;
+        let accel = specular_accel(scene, mesh);
+        let stage = progress.stage("form factors", mesh.elements.len() as u64, "elements");
+        let start = Instant::now();
+        let ff = match &accel {
+            Some(accel) => {
+                let paths = specular_paths(scene, mesh, accel);
+                let (ff, specular_stats) = form_factors::compute_extended(mesh, params, &paths, &|| stage.inc(1));
+                stats.specular_pixels = specular_stats.pixels;
+                stats.specular_rays = specular_stats.rays;
+                stats.extended_nonzeros = specular_stats.entries;
+                ff
+            }
+            None => form_factors::compute(mesh, params, &|| stage.inc(1)),
+        };
+        let seconds = start.elapsed().as_secs_f64();
+        stats.elements = mesh.elements.len();
+        stats.hemicube_resolution_px = params.hemicube_resolution_px;
+        stats.form_factor_seconds = seconds;
+        stats.form_factor_nonzeros = ff.nnz();
+        stats.form_factor_bytes = ff.memory_bytes();
+        stats.hemicubes_per_second = mesh.elements.len() as f64 / seconds.max(1e-9);
+        let specular_note = if stats.specular_rays > 0 {
+            format!(
+                "; through specular surfaces: {} pixels, {} rays, {} extended entries",
+                stats.specular_pixels, stats.specular_rays, stats.extended_nonzeros
+            )
+        } else {
+            String::new()
+        };
+        stage.finish(&format!(
+            "{} elements at {}², {:.0} hemicubes/s, {} non-zeros ({:.1} MiB){specular_note}",
+            mesh.elements.len(),
+            params.hemicube_resolution_px,
+            stats.hemicubes_per_second,
+            ff.nnz(),
+            ff.memory_bytes() as f64 / (1 << 20) as f64
+        ));
+        ff
+    }
+
+    /// Solves B = E + ρ·F·B over `ff` with this method's solver and adds the direct part, the vertex
+    /// averages and the fingerprint.
+    fn solve_matrix(
+        &self,
+        scene: &SceneDescription,
+        mesh: &Mesh,
+        ff: &FormFactors,
+        progress: &Progress,
+        stats: &mut PassOneStats,
+    ) -> Solution {
+        let params = RadiosityParams { solver: self.solver, ..scene.radiosity.clone() };
+        let stage = progress.stage("solving", params.max_iterations as u64, "sweeps");
+        let start = Instant::now();
+        let solution = solver::solve_solution(mesh, &scene.materials, ff, &params, &mut |iteration, residual| {
+            stage.set_position(iteration as u64);
+            stage.set_message(format!("residual {residual:.2e}"));
+        });
+        stats.solve_seconds = start.elapsed().as_secs_f64();
+        stats.solver = Some(self.name());
+        stats.sweeps = solution.stats.iterations;
+        stats.final_residual = solution.stats.residual_history.last().copied().unwrap_or(0.0);
+        stage.finish(&format!(
+            "{}: {} iterations, residual {:.2e}{}",
+            self.name(),
+            stats.sweeps,
+            stats.final_residual,
+            if solution.stats.converged { "" } else { " (not converged: iteration cap)" }
+        ));
+        solution
+    }
+}
+
+impl PassOneMethod for FullMatrix {
+    fn name(&self) -> String {
+        self.solver.name().to_string()
+    }
+
+    /// The matrix's bound (`form_factor_bytes_bound`), twice for shooting, which also keeps the
+    /// transpose; the bound is pessimistic by about 2× (an element sees part of the scene), hence
+    /// the halving before comparing with the available memory.
+    fn check_memory(&self, scene: &SceneDescription, mesh: &Mesh) -> Result<(), MethodError> {
+        let mut bound = form_factor_bytes_bound(mesh, &scene.radiosity);
+        if self.solver == SolverKind::Progressive {
+            bound *= 2;
+        }
+        if let Some(available) = available_memory_bytes() {
+            if bound / 2 > available {
+                const GIB: f64 = (1u64 << 30) as f64;
+                return Err(MethodError::OutOfMemory {
+                    scene: scene.path.display().to_string(),
+                    elements: mesh.elements.len(),
+                    resolution: scene.radiosity.hemicube_resolution_px,
+                    needed_gib: bound as f64 / 2.0 / GIB,
+                    available_gib: available as f64 / GIB,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn solve(
+        &self,
+        scene: &SceneDescription,
+        mesh: Mesh,
+        reuse: &mut Reuse,
+        progress: &Progress,
+    ) -> Result<PassOne, MethodError> {
+        let mut stats = PassOneStats { elements: mesh.elements.len(), ..Default::default() };
+        // Only a batch keeps form factors, so only a batch needs their key.
+        let key = reuse.keep.then(|| fingerprint::form_factor_key(&mesh, &scene.materials, &scene.radiosity));
+        let (ff, reused) = match (&reuse.form_factors, key) {
+            (Some((k, ff)), Some(key)) if *k == key => (ff.clone(), true),
+            _ => {
+                reuse.form_factors = None; // free the previous scene's matrix first
+                self.check_memory(scene, &mesh)?;
+                let ff = Arc::new(self.compute_form_factors(scene, &mesh, progress, &mut stats));
+                if let Some(key) = key {
+                    reuse.form_factors = Some((key, ff.clone()));
+                }
+                (ff, false)
+            }
+        };
+        let solution = self.solve_matrix(scene, &mesh, &ff, progress, &mut stats);
+        Ok(PassOne { mesh, solution, stats, reused_form_factors: reused })
+    }
+}
+
+/// Progressive refinement without a stored matrix (`matrix_free`): one hemicube per shot, O(n)
+/// memory whatever the element count, so it has no memory check and nothing for a batch to reuse but
+/// the solution.
+#[derive(Clone, Copy, Debug)]
+pub struct MatrixFree;
+
+impl PassOneMethod for MatrixFree {
+    fn name(&self) -> String {
+        "progressive (matrix-free)".to_string()
+    }
+
+    fn check_memory(&self, _scene: &SceneDescription, _mesh: &Mesh) -> Result<(), MethodError> {
+        Ok(())
+    }
+
+    fn solve(
+        &self,
+        scene: &SceneDescription,
+        mesh: Mesh,
+        _reuse: &mut Reuse,
+        progress: &Progress,
+    ) -> Result<PassOne, MethodError> {
+        let params = &scene.radiosity;
+        let mut stats = PassOneStats::default();
+        let accel = specular_accel(scene, &mesh);
+        // Progress in per mille of the emitted power shot (the unshot fraction falls from 1 to 0).
+        let stage = progress.stage("shooting (matrix-free)", 1000, "‰ shot");
+        let start = Instant::now();
+        let paths = accel.as_ref().map(|a| specular_paths(scene, &mesh, a));
+        let solved = matrix_free::solve(&mesh, params, paths.as_ref(), &mut |shots, unshot_fraction| {
+            stage.set_position(((1.0 - unshot_fraction).clamp(0.0, 1.0) * 1000.0) as u64);
+            stage.set_message(format!("{shots} shots, unshot {unshot_fraction:.2e}"));
+        });
+        let seconds = start.elapsed().as_secs_f64();
+        stats.elements = mesh.elements.len();
+        stats.hemicube_resolution_px = params.hemicube_resolution_px;
+        stats.solve_seconds = seconds;
+        stats.hemicubes_per_second = solved.stats.iterations as f64 / seconds.max(1e-9);
+        stats.solver = Some(self.name());
+        stats.sweeps = solved.stats.iterations;
+        stats.final_residual = solved.stats.residual_history.last().copied().unwrap_or(0.0);
+        stage.finish(&format!(
+            "progressive, matrix-free: {} shots, unshot fraction {:.2e}{}",
+            stats.sweeps,
+            stats.final_residual,
+            if solved.stats.converged {
+                ""
+            } else {
+                " (not converged: shot cap; the ambient term stands in for the rest)"
+            }
+        ));
+        let solution = Solution::from_element_values(
+            &mesh,
+            &scene.materials,
+            &solved.exitance,
+            &solved.direct_exitance,
+            solved.stats,
+        );
+        Ok(PassOne { mesh, solution, stats, reused_form_factors: false })
+    }
+}

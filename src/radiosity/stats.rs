@@ -1,0 +1,38 @@
+//! What pass one measured: how a solve went (stored in solution files) and the figures a run reports
+//! (`--stats`, batch manifests).
+
+use crate::scene::SolverKind;
+
+/// How a solve went.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SolveStats {
+    pub solver: SolverKind,
+    /// Sweeps (Gauss-Seidel, Jacobi) or shots (progressive refinement) performed.
+    pub iterations: u32,
+    /// The convergence measure after each sweep (largest relative change), or after each shot (unshot
+    /// power / emitted power for progressive refinement).
+    pub residual_history: Vec<f64>,
+    pub converged: bool,
+}
+
+/// What pass one measured, reported by `--stats` and in batch manifests (flattened into the run's
+/// statistics, so the JSON keys are the same as before).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PassOneStats {
+    pub elements: usize,
+    pub hemicube_resolution_px: u32,
+    pub form_factor_seconds: f64,
+    pub form_factor_nonzeros: usize,
+    pub form_factor_bytes: usize,
+    pub hemicubes_per_second: f64,
+    /// Hemicube pixels that showed a mirror or glass and were followed by rays (0 without them).
+    pub specular_pixels: u64,
+    /// Rays traced for the extended form factors through specular surfaces.
+    pub specular_rays: u64,
+    /// Extended form-factor entries (part of `form_factor_nonzeros`).
+    pub extended_nonzeros: u64,
+    pub solver: Option<String>,
+    pub sweeps: u32,
+    pub final_residual: f64,
+    pub solve_seconds: f64,
+}

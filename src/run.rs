@@ -1,0 +1,420 @@
+//! One way to run a job: load the scene and lay the overrides over it, mesh it, run pass one with the
+//! scene's method (or load a saved solution), then either save the solution or render and write the
+//! images. A single `render` or `solve` is a batch of one; a batch reuses form factors and solutions
+//! between its jobs. `Failure` carries the exit code each error type chooses (`From` impls).
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::Context;
+
+use crate::accel::Accel;
+use crate::compare::CompareError;
+use crate::film::{self, Image};
+use crate::mesh::{self, Mesh};
+use crate::output::{self, OutputError, ToneCurve};
+use crate::progress::Progress;
+use crate::radiosity::method::{self, MethodError, Reuse};
+use crate::radiosity::solution_file::SolutionFileError;
+use crate::radiosity::{fingerprint, PassOneStats, Solution};
+use crate::scene::overrides::OverrideError;
+use crate::scene::{self, Overrides, SceneDescription, SceneError};
+use crate::trace::camera::PinholeCamera;
+use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
+use crate::trace::TraceError;
+
+/// A failed run: the error chain to print and the exit code (2: bad input or usage, 1: internal).
+#[derive(Debug)]
+pub struct Failure {
+    pub exit_code: i32,
+    pub error: anyhow::Error,
+}
+
+impl Failure {
+    /// Bad input or usage: exit code 2.
+    pub fn input(error: impl Into<anyhow::Error>) -> Self {
+        Failure { exit_code: 2, error: error.into() }
+    }
+
+    /// A bug or an environment failure inside radray: exit code 1.
+    pub fn internal(error: impl Into<anyhow::Error>) -> Self {
+        Failure { exit_code: 1, error: error.into() }
+    }
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:#}", self.error)
+    }
+}
+
+/// Each error type's exit code: the user's input (2) or radray itself (1).
+macro_rules! exit_code_of {
+    ($($error:ty => $constructor:ident),* $(,)?) => {
+        $(impl From<$error> for Failure {
+            fn from(e: $error) -> Self {
+                Failure::$constructor(e)
+            }
+        })*
+    };
+}
+
+exit_code_of! {
+    SceneError => input,
+    OverrideError => input,
+    MeshError => input,
+    MethodError => input,
+    SolutionFileError => input,
+    OutputError => input,
+    CompareError => input,
+    TraceError => internal,
+    serde_json::Error => internal,
+}
+
+/// What pass one is asked to refuse before meshing.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    #[error("{scene}: meshing at max_element_edge = {edge} would make {elements} elements, more than radray handles ({limit}); use a larger max_element_edge or a coarser --quality")]
+    TooManyElements { scene: String, edge: f32, elements: u64, limit: u64 },
+}
+
+/// Most elements a mesh may have: beyond this even the per-element arrays and one hemicube pass
+/// per element are out of reach of a workstation.
+pub const MAX_ELEMENTS: u64 = 2_000_000;
+
+/// What a run measured, written by `--stats` and into batch manifests.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct RunStats {
+    #[serde(flatten)]
+    pub pass_one: PassOneStats,
+    pub render_seconds: f64,
+    pub primary_rays: u64,
+    pub secondary_rays: u64,
+    pub shadow_rays: u64,
+    pub rays_per_second: f64,
+    pub samples: u64,
+    pub adaptive_extra_samples: u64,
+    pub peak_memory_bytes: u64,
+}
+
+/// What pass two draws.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// The two-pass image: radiosity diffuse term plus Whitted specular transport.
+    Final,
+    /// The pure radiosity output: first hit's interpolated radiosity / π.
+    Radiosity,
+    /// Both, as NAME.final.EXT and NAME.radiosity.EXT.
+    Both,
+}
+
+/// How a PNG is encoded from radiance: exposure in stops, then the tone curve.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PngSettings {
+    pub exposure_stops: f32,
+    pub tone: ToneCurve,
+}
+
+/// What a job makes.
+#[derive(Clone, Debug)]
+pub enum Work {
+    /// Images, one per planned output (from `output_plan`), from a solved or a loaded solution.
+    Render { plan: Vec<(TraceMode, PathBuf)>, png: PngSettings, solution: Option<PathBuf> },
+    /// The solution file.
+    Solve { output: PathBuf },
+}
+
+/// One job: a scene, the settings laid over it, and what to make.
+#[derive(Clone, Debug)]
+pub struct Job {
+    pub scene: PathBuf,
+    pub overrides: Overrides,
+    pub work: Work,
+}
+
+/// What a finished job reports.
+#[derive(Debug, Default)]
+pub struct Outcome {
+    pub written: Vec<PathBuf>,
+    pub stats: RunStats,
+    /// Whether the form factors / solution came from an earlier job of the batch.
+    pub reused_form_factors: bool,
+    pub reused_solution: bool,
+}
+
+/// Runs jobs one after another, keeping for the later ones what they may reuse.
+pub struct Runner {
+    reuse: Reuse,
+    /// Solutions by `PassOneMethod::solution_key`; only kept across jobs.
+    solutions: Option<HashMap<u64, Arc<Solution>>>,
+}
+
+impl Runner {
+    /// A runner for one job, which keeps nothing.
+    pub fn single() -> Self {
+        Runner { reuse: Reuse::none(), solutions: None }
+    }
+
+    /// A runner for a batch: form factors and solutions are shared between jobs.
+    pub fn batch() -> Self {
+        Runner { reuse: Reuse::across_jobs(), solutions: Some(HashMap::new()) }
+    }
+
+    /// Runs one job; `outcome.stats` holds what was measured, also when the job fails part-way.
+    pub fn run(&mut self, job: &Job, progress: &Progress, outcome: &mut Outcome) -> Result<(), Failure> {
+        let scene = load_scene(&job.scene, &job.overrides, progress)?;
+        let solution_file = match &job.work {
+            Work::Render { solution, .. } => solution.as_deref(),
+            Work::Solve { .. } => None,
+        };
+        let (mesh, solution) = self.pass_one(&scene, solution_file, progress, outcome)?;
+        match &job.work {
+            Work::Solve { output } => {
+                solution.save(output)?;
+                outcome.written.push(output.clone());
+            }
+            Work::Render { plan, png, .. } => {
+                outcome.written = render_plan(&scene, &mesh, &solution, plan, png, progress, &mut outcome.stats)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Pass one for a scene: the mesh and its solution, loaded from `solution_file`, reused from an
+    /// earlier job, black without emitters, or solved by the scene's method.
+    pub fn pass_one(
+        &mut self,
+        scene: &SceneDescription,
+        solution_file: Option<&Path>,
+        progress: &Progress,
+        outcome: &mut Outcome,
+    ) -> Result<(Mesh, Arc<Solution>), Failure> {
+        let mesh = build_mesh(scene, progress)?;
+        outcome.stats.pass_one.elements = mesh.elements.len();
+        if let Some(path) = solution_file {
+            let solution = Solution::load(path, fingerprint::fingerprint(&mesh, &scene.materials))?;
+            return Ok((mesh, Arc::new(solution)));
+        }
+        let method = method::for_params(&scene.radiosity);
+        let key = self.solutions.as_ref().map(|_| method.solution_key(scene, &mesh));
+        if let (Some(solutions), Some(key)) = (&self.solutions, key) {
+            if let Some(solution) = solutions.get(&key) {
+                outcome.reused_solution = true;
+                outcome.reused_form_factors = true;
+                return Ok((mesh, solution.clone()));
+            }
+        }
+        if !scene.has_emitter() {
+            let black = Solution::black(&mesh, &scene.materials);
+            return Ok((mesh, Arc::new(black)));
+        }
+        let done = method.solve(scene, mesh, &mut self.reuse, progress)?;
+        outcome.stats.pass_one = done.stats;
+        outcome.reused_form_factors = done.reused_form_factors;
+        let solution = Arc::new(done.solution);
+        if let (Some(solutions), Some(key)) = (&mut self.solutions, key) {
+            solutions.insert(key, solution.clone());
+        }
+        Ok((done.mesh, solution))
+    }
+}
+
+/// Pass one of a single run (see `Runner::pass_one`), adding what it measured to `stats`.
+pub fn pass_one(
+    scene: &SceneDescription,
+    solution_file: Option<&Path>,
+    progress: &Progress,
+    stats: &mut RunStats,
+) -> Result<(Mesh, Arc<Solution>), Failure> {
+    let mut outcome = Outcome { stats: std::mem::take(stats), ..Default::default() };
+    let result = Runner::single().pass_one(scene, solution_file, progress, &mut outcome);
+    *stats = outcome.stats;
+    result
+}
+
+/// Loads a scene, prints its warnings, and lays the overrides over it.
+pub fn load_scene(path: &Path, overrides: &Overrides, progress: &Progress) -> Result<SceneDescription, Failure> {
+    let mut scene = scene::load(path)?;
+    for w in &scene.warnings {
+        progress.note(&format!("warning: {w}"));
+    }
+    overrides.apply(&mut scene)?;
+    Ok(scene)
+}
+
+/// Meshes the scene after checking that the element count is sane.
+pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh, MeshError> {
+    let edge = scene.radiosity.max_element_edge;
+    let count = mesh::count_elements(scene, edge);
+    if count > MAX_ELEMENTS {
+        return Err(MeshError::TooManyElements {
+            scene: scene.path.display().to_string(),
+            edge,
+            elements: count,
+            limit: MAX_ELEMENTS,
+        });
+    }
+    let stage = progress.stage("meshing", scene.surfaces.len() as u64, "surfaces");
+    let mesh = Mesh::build(scene, edge);
+    stage.finish(&format!(
+        "{} surfaces → {} elements, {} triangles",
+        scene.surfaces.len(),
+        mesh.elements.len(),
+        mesh.triangles.len()
+    ));
+    Ok(mesh)
+}
+
+/// Checks that `output`'s directory exists, before any work.
+pub fn check_output_directory(output: &Path) -> Result<(), Failure> {
+    let dir = output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(Failure::input(anyhow::anyhow!(
+            "{}: directory {} does not exist",
+            output.display(),
+            dir.display()
+        )));
+    }
+    Ok(())
+}
+
+/// The files a render writes: `-o` as given, or NAME.final.EXT and NAME.radiosity.EXT for `both`.
+pub fn output_plan(outputs: &[PathBuf], mode: Mode) -> Result<Vec<(TraceMode, PathBuf)>, Failure> {
+    let mut plan = Vec::new();
+    for out in outputs {
+        let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+        if ext != "png" && ext != "exr" {
+            return Err(Failure::input(anyhow::anyhow!("{}: output must end in .png or .exr", out.display())));
+        }
+        check_output_directory(out)?;
+        let tagged = |tag: &str| {
+            let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            out.with_file_name(format!("{stem}.{tag}.{ext}"))
+        };
+        match mode {
+            Mode::Final => plan.push((TraceMode::Final, out.clone())),
+            Mode::Radiosity => plan.push((TraceMode::Radiosity, out.clone())),
+            Mode::Both => {
+                plan.push((TraceMode::Final, tagged("final")));
+                plan.push((TraceMode::Radiosity, tagged("radiosity")));
+            }
+        }
+    }
+    Ok(plan)
+}
+
+/// Writes an image as PNG or EXR by its extension.
+pub fn write_image(image: &Image, path: &Path, png: &PngSettings) -> Result<(), Failure> {
+    let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if is_exr {
+        output::write_exr(image, path)?;
+    } else {
+        output::write_png(image, path, png.exposure_stops, png.tone)?;
+    }
+    Ok(())
+}
+
+/// Renders every planned output of one scene (each mode once) and writes them.
+pub fn render_plan(
+    scene: &SceneDescription,
+    mesh: &Mesh,
+    solution: &Solution,
+    plan: &[(TraceMode, PathBuf)],
+    png: &PngSettings,
+    progress: &Progress,
+    stats: &mut RunStats,
+) -> Result<Vec<PathBuf>, Failure> {
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let mut written = Vec::new();
+    let mut rendered: Vec<(TraceMode, Image)> = Vec::new();
+    for (mode, path) in plan {
+        if !rendered.iter().any(|(m, _)| m == mode) {
+            let image = render(scene, mesh, &accel, solution, *mode, progress, stats)?;
+            rendered.push((*mode, image));
+        }
+        let image = &rendered
+            .iter()
+            .find(|(m, _)| m == mode)
+            .map(|(_, i)| i)
+            .ok_or_else(|| Failure::internal(anyhow::anyhow!("image missing")))?;
+        write_image(image, path, png)?;
+        written.push(path.clone());
+    }
+    Ok(written)
+}
+
+/// Pass two: traces the camera's rays through the scene and develops the film.
+pub fn render(
+    scene: &SceneDescription,
+    mesh: &Mesh,
+    accel: &Accel,
+    solution: &Solution,
+    mode: TraceMode,
+    progress: &Progress,
+    stats: &mut RunStats,
+) -> Result<Image, TraceError> {
+    let image = &scene.image;
+    let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
+    let tracer =
+        Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?.with_shading_normals(&scene.surfaces);
+    let tracer = if mode == TraceMode::Final { tracer.with_caustics() } else { tracer };
+    let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
+    let stage = progress.stage(
+        if mode == TraceMode::Final { "render final" } else { "render radiosity" },
+        tiles as u64,
+        "tiles",
+    );
+    let start = Instant::now();
+    let (picture, film_stats, counts) = film::render_with(
+        image,
+        RayCounts::default,
+        |counts: &mut RayCounts, x, y, rng| {
+            let ray = camera.ray(x, y);
+            tracer.radiance(ray.origin, ray.dir, mode, rng, counts)
+        },
+        &|| stage.inc(1),
+    );
+    let seconds = start.elapsed().as_secs_f64();
+    let total: RayCounts = counts.into_iter().sum();
+    stats.render_seconds += seconds;
+    stats.primary_rays += total.primary;
+    stats.secondary_rays += total.secondary;
+    stats.shadow_rays += total.shadow;
+    stats.samples += film_stats.samples;
+    stats.adaptive_extra_samples += film_stats.adaptive_extra_samples;
+    let rays = total.primary + total.secondary + total.shadow;
+    stats.rays_per_second =
+        (stats.primary_rays + stats.secondary_rays + stats.shadow_rays) as f64 / stats.render_seconds.max(1e-9);
+    stage.finish(&format!(
+        "{}×{} at {} spp: {} rays ({:.2} M rays/s)",
+        image.width_px,
+        image.height_px,
+        image.samples_per_pixel,
+        rays,
+        rays as f64 / seconds.max(1e-9) / 1e6
+    ));
+    Ok(picture)
+}
+
+/// Peak resident memory of this process so far (Linux `VmHWM`), 0 if unknown.
+pub fn peak_memory_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|t| {
+            t.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        })
+        .map_or(0, |kib| kib * 1024)
+}
+
+/// Writes what a run measured as JSON (with the peak memory so far), if asked for.
+pub fn write_stats(path: Option<&Path>, stats: &mut RunStats) -> Result<(), Failure> {
+    let Some(path) = path else { return Ok(()) };
+    stats.peak_memory_bytes = peak_memory_bytes();
+    let text = serde_json::to_string_pretty(stats)?;
+    output::write_atomically(path, text.as_bytes())
+        .with_context(|| format!("{}: cannot write stats", path.display()))
+        .map_err(Failure::input)
+}
