@@ -25,10 +25,12 @@ fn whole_small_render(c: &mut Criterion) {
         b.iter(|| {
             let scene = cli::load_scene(&scene_path("cornell_box.toml"), &overrides, &progress).unwrap();
             let mut stats = RunStats::default();
-            let (mesh, solution) = cli::pass_one(&scene, None, &progress, &mut stats).unwrap();
+            let photons = pipeline::RunPhotons::default();
+            let (mesh, solution) = cli::pass_one(&scene, None, &photons, &progress, &mut stats).unwrap();
             let accel = Accel::build(&mesh.positions, &mesh.triangles);
             black_box(
-                pipeline::render(&scene, &mesh, &accel, &solution, TraceMode::Final, &progress, &mut stats).unwrap(),
+                pipeline::render(&scene, &mesh, &accel, &solution, TraceMode::Final, &photons, &progress, &mut stats)
+                    .unwrap(),
             )
         })
     });
@@ -40,7 +42,9 @@ fn pass_two_specular_512(c: &mut Criterion) {
     let overrides = Overrides { width: Some(512), height: Some(512), spp: Some(16), ..Default::default() };
     let mut scene = cli::load_scene(&scene_path("cornell_specular.toml"), &overrides, &progress).unwrap();
     let mut stats = RunStats::default();
-    let (mesh, solution) = cli::pass_one(&scene, None, &progress, &mut stats).unwrap();
+    // The run's photons are traced once (by pass one) and shared by every render below.
+    let photons = pipeline::RunPhotons::default();
+    let (mesh, solution) = cli::pass_one(&scene, None, &photons, &progress, &mut stats).unwrap();
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let mut group = c.benchmark_group("pass two, cornell_specular 512x512 16 spp");
     group.sample_size(10);
@@ -52,7 +56,9 @@ fn pass_two_specular_512(c: &mut Criterion) {
         scene.render.direct = direct;
         group.bench_function(name, |b| {
             b.iter(|| {
-                black_box(pipeline::render(&scene, &mesh, &accel, &solution, mode, &progress, &mut stats).unwrap())
+                black_box(
+                    pipeline::render(&scene, &mesh, &accel, &solution, mode, &photons, &progress, &mut stats).unwrap(),
+                )
             })
         });
     }

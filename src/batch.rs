@@ -243,6 +243,7 @@ fn run_job(
     let mesh = pipeline::build_mesh(&scene, progress).map_err(Failure::input)?;
     stats.elements = mesh.elements.len();
     let key = solution_key(&mesh, &scene);
+    let photons = pipeline::RunPhotons::default();
     let solution = if let Some(s) = cache.solutions.get(&key) {
         record.reused_solution = true;
         record.reused_form_factors = true;
@@ -265,7 +266,8 @@ fn run_job(
                 cache.form_factors = None; // free the previous scene's matrix first
                 pipeline::check_memory(&scene, &mesh).map_err(Failure::input)?;
                 let accel = pipeline::specular_accel(&scene, &mesh);
-                let ff = Arc::new(pipeline::compute_form_factors(&scene, &mesh, accel.as_ref(), progress, stats));
+                let ff =
+                    Arc::new(pipeline::compute_form_factors(&scene, &mesh, accel.as_ref(), &photons, progress, stats));
                 cache.form_factors = Some((gkey, ff.clone()));
                 ff
             }
@@ -274,7 +276,7 @@ fn run_job(
         cache.solutions.insert(key, solution.clone());
         solution
     };
-    cli::render_scene(&scene, &mesh, &solution, &plan, &overrides, progress, stats)
+    cli::render_scene(&scene, &mesh, &solution, &plan, &overrides, &photons, progress, stats)
 }
 
 /// Applies a job's camera and material overrides, checking materials as the scene parser does.

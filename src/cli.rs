@@ -349,6 +349,7 @@ pub fn output_plan(outputs: &[PathBuf], mode: Mode) -> Result<Vec<(TraceMode, Pa
 pub fn pass_one(
     scene: &SceneDescription,
     solution_file: Option<&Path>,
+    photons: &pipeline::RunPhotons,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> Result<(crate::mesh::Mesh, Solution), Failure> {
@@ -369,7 +370,7 @@ pub fn pass_one(
     }
     pipeline::check_memory(scene, &mesh).map_err(Failure::input)?;
     let accel = pipeline::specular_accel(scene, &mesh);
-    let ff = pipeline::compute_form_factors(scene, &mesh, accel.as_ref(), progress, stats);
+    let ff = pipeline::compute_form_factors(scene, &mesh, accel.as_ref(), photons, progress, stats);
     let solution = pipeline::solve(scene, &mesh, &ff, progress, stats);
     Ok((mesh, solution))
 }
@@ -391,12 +392,14 @@ pub fn write_image(image: &crate::film::Image, path: &Path, overrides: &Override
 }
 
 /// Renders every planned output of one scene.
+#[allow(clippy::too_many_arguments)]
 pub fn render_scene(
     scene: &SceneDescription,
     mesh: &crate::mesh::Mesh,
     solution: &Solution,
     plan: &[(TraceMode, PathBuf)],
     overrides: &Overrides,
+    photons: &pipeline::RunPhotons,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> Result<Vec<PathBuf>, Failure> {
@@ -405,8 +408,8 @@ pub fn render_scene(
     let mut rendered: Vec<(TraceMode, crate::film::Image)> = Vec::new();
     for (mode, path) in plan {
         if !rendered.iter().any(|(m, _)| m == mode) {
-            let image =
-                pipeline::render(scene, mesh, &accel, solution, *mode, progress, stats).map_err(Failure::internal)?;
+            let image = pipeline::render(scene, mesh, &accel, solution, *mode, photons, progress, stats)
+                .map_err(Failure::internal)?;
             rendered.push((*mode, image));
         }
         let image = &rendered
@@ -433,8 +436,9 @@ fn render_command(args: &RenderArgs, progress: &Progress) -> Result<(), Failure>
     let plan = output_plan(&args.output, args.mode)?;
     let scene = load_scene(&args.scene, &args.overrides, progress)?;
     let mut stats = RunStats::default();
-    let (mesh, solution) = pass_one(&scene, args.solution.as_deref(), progress, &mut stats)?;
-    let written = render_scene(&scene, &mesh, &solution, &plan, &args.overrides, progress, &mut stats)?;
+    let photons = pipeline::RunPhotons::default();
+    let (mesh, solution) = pass_one(&scene, args.solution.as_deref(), &photons, progress, &mut stats)?;
+    let written = render_scene(&scene, &mesh, &solution, &plan, &args.overrides, &photons, progress, &mut stats)?;
     for path in written {
         if progress.verbosity() == Verbosity::Verbose {
             eprintln!("wrote {}", path.display());
@@ -455,7 +459,7 @@ fn solve_command(args: &SolveArgs, progress: &Progress) -> Result<(), Failure> {
     }
     let scene = load_scene(&args.scene, &overrides, progress)?;
     let mut stats = RunStats::default();
-    let (_mesh, solution) = pass_one(&scene, None, progress, &mut stats)?;
+    let (_mesh, solution) = pass_one(&scene, None, &pipeline::RunPhotons::default(), progress, &mut stats)?;
     solution.save(&args.output).map_err(Failure::input)?;
     write_stats(args.stats.as_ref(), &mut stats)
 }

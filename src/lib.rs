@@ -19,3 +19,4 @@ pub mod radiosity;
 pub mod rng;
 pub mod scene;
 pub mod trace;
+pub mod transport;

@@ -10,6 +10,8 @@ use crate::radiosity::{form_factors, progressive, FormFactors, Solution};
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
 use crate::trace::camera::PinholeCamera;
 use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
+use crate::transport::photons::{self, Photons};
+use std::cell::OnceCell;
 use std::time::Instant;
 
 /// Why a run cannot go on (before anything is allocated or written).
@@ -134,12 +136,34 @@ pub fn specular_accel(scene: &SceneDescription, mesh: &Mesh) -> Option<Accel> {
     specular::mesh_has_specular(mesh, &scene.materials).then(|| Accel::build(&mesh.positions, &mesh.triangles))
 }
 
+/// The photons of one run (`transport::photons`): traced by whichever pass needs them first, then read
+/// by both, pass one's extended form factors and pass two's caustic map. Make one per scene and mesh.
+#[derive(Default)]
+pub struct RunPhotons(OnceCell<Option<Photons>>);
+
+impl RunPhotons {
+    /// The photons of `scene` meshed as `mesh` (`accel` built from its triangles), traced in parallel
+    /// batches on first use; `None` without specular surfaces or emitters.
+    pub fn get(&self, scene: &SceneDescription, mesh: &Mesh, accel: &Accel) -> Option<&Photons> {
+        self.0
+            .get_or_init(|| {
+                photons::trace_photons(mesh, accel, &scene.materials, Some(&scene.surfaces), |count, trace| {
+                    use rayon::prelude::*;
+                    (0..count).into_par_iter().map(trace).collect()
+                })
+            })
+            .as_ref()
+    }
+}
+
 /// Hemicube form factors of every element (rows only where an element reflects or emits), extended
-/// through the scene's specular surfaces when `accel` (from `specular_accel`) is given.
+/// through the scene's specular surfaces when `accel` (from `specular_accel`) is given, with the run's
+/// `photons` for the light paths to the emitters.
 pub fn compute_form_factors(
     scene: &SceneDescription,
     mesh: &Mesh,
     accel: Option<&Accel>,
+    photons: &RunPhotons,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> FormFactors {
@@ -148,12 +172,11 @@ pub fn compute_form_factors(
     let start = Instant::now();
     let ff = match accel {
         Some(accel) => {
-            let paths = SpecularPaths::new(mesh, accel, &scene.materials)
-                .with_shading_normals(&scene.surfaces)
-                .with_light_paths(|count, trace| {
-                    use rayon::prelude::*;
-                    (0..count).into_par_iter().map(trace).collect()
-                });
+            let paths = SpecularPaths::new(mesh, accel, &scene.materials).with_shading_normals(&scene.surfaces);
+            let paths = match photons.get(scene, mesh, accel) {
+                Some(photons) => paths.with_light_paths(photons),
+                None => paths,
+            };
             let (ff, specular_stats) = form_factors::compute_extended(mesh, params, &paths, &|| stage.inc(1));
             stats.specular_pixels = specular_stats.pixels;
             stats.specular_rays = specular_stats.rays;
@@ -253,13 +276,16 @@ pub fn solve_matrix_free(
     Solution::from_element_values(mesh, &scene.materials, &solved.exitance, &solved.direct_exitance, solved.stats)
 }
 
-/// Pass two: traces the camera's rays through the scene and develops the film.
+/// Pass two: traces the camera's rays through the scene and develops the film; the final mode shows
+/// the run's `photons` as caustics.
+#[allow(clippy::too_many_arguments)]
 pub fn render(
     scene: &SceneDescription,
     mesh: &Mesh,
     accel: &Accel,
     solution: &Solution,
     mode: TraceMode,
+    photons: &RunPhotons,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> Result<Image, crate::trace::TraceError> {
@@ -267,7 +293,10 @@ pub fn render(
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
     let tracer =
         Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?.with_shading_normals(&scene.surfaces);
-    let tracer = if mode == TraceMode::Final { tracer.with_caustics() } else { tracer };
+    let tracer = match photons.get(scene, mesh, accel) {
+        Some(photons) if mode == TraceMode::Final => tracer.with_caustics(photons),
+        _ => tracer,
+    };
     let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
     let stage = progress.stage(
         if mode == TraceMode::Final { "render final" } else { "render radiosity" },
@@ -278,9 +307,9 @@ pub fn render(
     let (picture, film_stats, counts) = film::render_with(
         image,
         RayCounts::default,
-        |counts: &mut RayCounts, x, y, rng| {
+        |counts: &mut RayCounts, x, y, sampler| {
             let ray = camera.ray(x, y);
-            tracer.radiance(ray.origin, ray.dir, mode, rng, counts)
+            tracer.radiance(ray.origin, ray.dir, mode, sampler, counts)
         },
         &|| stage.inc(1),
     );

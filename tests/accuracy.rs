@@ -31,11 +31,12 @@ fn load(scene: &str) -> SceneDescription {
 fn render(scene: &SceneDescription, modes: &[TraceMode]) -> Vec<Image> {
     let progress = Progress::hidden();
     let mut stats = RunStats::default();
-    let (mesh, solution) = cli::pass_one(scene, None, &progress, &mut stats).unwrap();
+    let photons = pipeline::RunPhotons::default();
+    let (mesh, solution) = cli::pass_one(scene, None, &photons, &progress, &mut stats).unwrap();
     let accel = radray::accel::Accel::build(&mesh.positions, &mesh.triangles);
     modes
         .iter()
-        .map(|&m| pipeline::render(scene, &mesh, &accel, &solution, m, &progress, &mut stats).unwrap())
+        .map(|&m| pipeline::render(scene, &mesh, &accel, &solution, m, &photons, &progress, &mut stats).unwrap())
         .collect()
 }
 
