@@ -10,7 +10,8 @@ use crate::mesh::Mesh;
 use crate::rng::Pcg32;
 use crate::scene::{Material, Surface};
 use crate::transport::hit::{ray_offset, scene_scale};
-use crate::transport::scatter::{carries, scatter};
+use crate::transport::ray_stack::RayStack;
+use crate::transport::scatter::scatter;
 use crate::transport::{Photons, SurfaceHit};
 
 /// Deepest specular chain followed from a hemicube pixel (bounces off or through specular surfaces).
@@ -50,14 +51,6 @@ impl std::ops::AddAssign for SpecularStats {
         self.rays += o.rays;
         self.entries += o.entries;
     }
-}
-
-#[derive(Clone, Copy, Debug, Default)]
-struct StackRay {
-    origin: Vec3,
-    dir: Vec3,
-    throughput: Vec3,
-    depth: u32,
 }
 
 /// The scene as the specular path follower sees it: triangles in a BVH, materials per element, and
@@ -176,13 +169,9 @@ impl<'a> SpecularPaths<'a> {
     /// pixel whose plain entry was dropped keeps its ΔF. Returns the rays traced.
     pub fn follow(&self, origin: Vec3, dir: Vec3, first_hit_counts: bool, mut reach: impl FnMut(u32, f32)) -> u64 {
         let mesh = self.mesh;
-        let mut stack = [StackRay::default(); STACK_SIZE];
-        stack[0] = StackRay { origin, dir: dir.normalize(), throughput: Vec3::ONE, depth: 0 };
-        let mut len = 1;
+        let mut stack = RayStack::<STACK_SIZE>::new(origin, dir);
         let mut rays = 0;
-        while len > 0 {
-            len -= 1;
-            let ray = stack[len];
+        while let Some(ray) = stack.pop() {
             rays += 1;
             let Some(hit) = self.accel.closest_hit(ray.origin, ray.dir, 0.0, f32::INFINITY) else {
                 continue;
@@ -206,18 +195,7 @@ impl<'a> SpecularPaths<'a> {
                 continue;
             }
             let hit = hit.with_shading_normal(mesh, self.surfaces, ray.dir);
-            for branch in scatter(material, ray.dir, &hit).split(ray.throughput).into_iter().flatten() {
-                if carries(branch.throughput, MIN_THROUGHPUT) {
-                    assert!(len < STACK_SIZE, "specular stack overflow: depth is bounded so this cannot happen");
-                    stack[len] = StackRay {
-                        origin: branch.origin(&hit, self.offset),
-                        dir: branch.dir,
-                        throughput: branch.throughput,
-                        depth: ray.depth + 1,
-                    };
-                    len += 1;
-                }
-            }
+            stack.push_branches(&ray, &scatter(material, ray.dir, &hit), &hit, self.offset, MIN_THROUGHPUT);
         }
         rays
     }

@@ -17,7 +17,8 @@ use crate::scene::{Material, RenderParams, Surface};
 use crate::transport::emitters::Emitters;
 use crate::transport::hit::{ray_offset, scene_scale};
 use crate::transport::optics::reflect;
-use crate::transport::scatter::{carries, scatter};
+use crate::transport::ray_stack::RayStack;
+use crate::transport::scatter::scatter;
 use crate::transport::{Photons, SurfaceHit};
 
 /// What the tracer returns per ray.
@@ -81,14 +82,6 @@ pub const MAX_DEPTH_LIMIT: u32 = 30;
 /// A depth-first walk pops one ray and pushes at most two one level deeper, so the stack never holds
 /// more than `max_depth + 2` rays.
 const STACK_SIZE: usize = MAX_DEPTH_LIMIT as usize + 2;
-
-#[derive(Clone, Copy, Debug, Default)]
-struct StackRay {
-    origin: Vec3,
-    dir: Vec3,
-    throughput: Vec3,
-    depth: u32,
-}
 
 /// Pass two over one meshed scene and its radiosity solution. Shared between threads (`&self`); each
 /// thread brings its own generator and ray counts.
@@ -210,14 +203,10 @@ impl<'a> Tracer<'a> {
     ) -> Vec3 {
         let mesh = self.mesh;
         let elements = &mesh.elements;
-        let mut stack = [StackRay::default(); STACK_SIZE];
-        stack[0] = StackRay { origin, dir: dir.normalize(), throughput: Vec3::ONE, depth: 0 };
-        let mut len = 1;
+        let mut stack = RayStack::<STACK_SIZE>::new(origin, dir);
         let mut radiance = Vec3::ZERO;
 
-        while len > 0 {
-            len -= 1;
-            let ray = stack[len];
+        while let Some(ray) = stack.pop() {
             if ray.depth == 0 {
                 counts.primary += 1;
             } else {
@@ -278,18 +267,7 @@ impl<'a> Tracer<'a> {
                 continue;
             }
 
-            for branch in scatter(material, ray.dir, &hit).split(ray.throughput).into_iter().flatten() {
-                if carries(branch.throughput, self.params.min_throughput) {
-                    assert!(len < STACK_SIZE, "ray stack overflow: depth is clamped so this cannot happen");
-                    stack[len] = StackRay {
-                        origin: branch.origin(&hit, self.offset),
-                        dir: branch.dir,
-                        throughput: branch.throughput,
-                        depth: ray.depth + 1,
-                    };
-                    len += 1;
-                }
-            }
+            stack.push_branches(&ray, &scatter(material, ray.dir, &hit), &hit, self.offset, self.params.min_throughput);
         }
         radiance
     }

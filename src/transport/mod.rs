@@ -8,6 +8,7 @@ pub mod emitters;
 pub mod hit;
 pub mod optics;
 pub mod photons;
+pub mod ray_stack;
 pub mod scatter;
 
 pub use hit::SurfaceHit;
