@@ -84,7 +84,7 @@ pub const MAX_DEPTH_LIMIT: u32 = 30;
 const STACK_SIZE: usize = MAX_DEPTH_LIMIT as usize + 2;
 
 /// Pass two over one meshed scene and its radiosity solution. Shared between threads (`&self`); each
-/// thread brings its own generator and ray counts.
+/// thread brings its own sampler and ray counts.
 pub struct Tracer<'a> {
     mesh: &'a Mesh,
     accel: &'a Accel,
