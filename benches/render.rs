@@ -8,6 +8,7 @@ use radray::progress::Progress;
 use radray::run::{self, RunStats};
 use radray::scene::{Overrides, Quality};
 use radray::trace::TraceMode;
+use radray::transport::photons::RunPhotons;
 use std::hint::black_box;
 use std::path::Path;
 
@@ -25,9 +26,13 @@ fn whole_small_render(c: &mut Criterion) {
         b.iter(|| {
             let scene = run::load_scene(&scene_path("cornell_box.toml"), &overrides, &progress).unwrap();
             let mut stats = RunStats::default();
-            let (mesh, solution) = run::pass_one(&scene, None, &progress, &mut stats).unwrap();
+            let photons = RunPhotons::default();
+            let (mesh, solution) = run::pass_one(&scene, None, &photons, &progress, &mut stats).unwrap();
             let accel = Accel::build(&mesh.positions, &mesh.triangles);
-            black_box(run::render(&scene, &mesh, &accel, &solution, TraceMode::Final, &progress, &mut stats).unwrap())
+            black_box(
+                run::render(&scene, &mesh, &accel, &solution, TraceMode::Final, &photons, &progress, &mut stats)
+                    .unwrap(),
+            )
         })
     });
     group.finish();
@@ -39,7 +44,9 @@ fn pass_two_specular_512(c: &mut Criterion) {
         Overrides { width_px: Some(512), height_px: Some(512), samples_per_pixel: Some(16), ..Default::default() };
     let mut scene = run::load_scene(&scene_path("cornell_specular.toml"), &overrides, &progress).unwrap();
     let mut stats = RunStats::default();
-    let (mesh, solution) = run::pass_one(&scene, None, &progress, &mut stats).unwrap();
+    // The run's photons are traced once (by pass one) and shared by every render below.
+    let photons = RunPhotons::default();
+    let (mesh, solution) = run::pass_one(&scene, None, &photons, &progress, &mut stats).unwrap();
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let mut group = c.benchmark_group("pass two, cornell_specular 512x512 16 spp");
     group.sample_size(10);
@@ -50,7 +57,9 @@ fn pass_two_specular_512(c: &mut Criterion) {
     ] {
         scene.render.direct = direct;
         group.bench_function(name, |b| {
-            b.iter(|| black_box(run::render(&scene, &mesh, &accel, &solution, mode, &progress, &mut stats).unwrap()))
+            b.iter(|| {
+                black_box(run::render(&scene, &mesh, &accel, &solution, mode, &photons, &progress, &mut stats).unwrap())
+            })
         });
     }
     group.finish();

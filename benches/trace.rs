@@ -12,6 +12,7 @@ use std::time::Instant;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::{vec3, Vec3};
 use radray::accel::Accel;
+use radray::film::Sampler;
 use radray::mesh::Mesh;
 use radray::radiosity::solution::Solution;
 use radray::rng::Pcg32;
@@ -178,15 +179,15 @@ fn bench_trace(c: &mut Criterion) {
         // Rays per sample, reported once (criterion reports samples/s).
         let mut counts = RayCounts::default();
         for (i, (o, d)) in samples.iter().enumerate() {
-            let mut rng = Pcg32::new(0, i as u64);
-            black_box(tracer.radiance(*o, *d, TraceMode::Final, &mut rng, &mut counts));
+            let mut sampler = Sampler::independent(0, i as u64);
+            black_box(tracer.radiance(*o, *d, TraceMode::Final, &mut sampler, &mut counts));
         }
         eprintln!("{name}: {:.3} rays/sample ({counts:?})", counts.total() as f64 / samples.len() as f64);
         report_cpu_rate(name, counts.total(), || {
             let mut counts = RayCounts::default();
             for (i, (o, d)) in samples.iter().enumerate() {
-                let mut rng = Pcg32::new(0, i as u64);
-                black_box(tracer.radiance(*o, *d, TraceMode::Final, &mut rng, &mut counts));
+                let mut sampler = Sampler::independent(0, i as u64);
+                black_box(tracer.radiance(*o, *d, TraceMode::Final, &mut sampler, &mut counts));
             }
         });
         group.bench_function(name, |b| {
@@ -194,8 +195,8 @@ fn bench_trace(c: &mut Criterion) {
                 let mut counts = RayCounts::default();
                 let mut sum = Vec3::ZERO;
                 for (i, (o, d)) in samples.iter().enumerate() {
-                    let mut rng = Pcg32::new(0, i as u64);
-                    sum += tracer.radiance(*o, *d, TraceMode::Final, &mut rng, &mut counts);
+                    let mut sampler = Sampler::independent(0, i as u64);
+                    sum += tracer.radiance(*o, *d, TraceMode::Final, &mut sampler, &mut counts);
                 }
                 sum
             })

@@ -18,3 +18,4 @@ pub mod rng;
 pub mod run;
 pub mod scene;
 pub mod trace;
+pub mod transport;

@@ -24,6 +24,7 @@ use crate::scene::{self, Overrides, SceneDescription, SceneError};
 use crate::trace::camera::PinholeCamera;
 use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
 use crate::trace::TraceError;
+use crate::transport::photons::RunPhotons;
 
 /// A failed run: the error chain to print and the exit code (2: bad input or usage, 1: internal).
 #[derive(Debug)]
@@ -170,14 +171,17 @@ impl Runner {
             Work::Render { solution, .. } => solution.as_deref(),
             Work::Solve { .. } => None,
         };
-        let (mesh, solution) = self.pass_one(&scene, solution_file, progress, outcome)?;
+        // One set of photons for both passes of this job (traced only if a pass needs them).
+        let photons = RunPhotons::default();
+        let (mesh, solution) = self.pass_one(&scene, solution_file, &photons, progress, outcome)?;
         match &job.work {
             Work::Solve { output } => {
                 solution.save(output)?;
                 outcome.written.push(output.clone());
             }
             Work::Render { plan, png, .. } => {
-                outcome.written = render_plan(&scene, &mesh, &solution, plan, png, progress, &mut outcome.stats)?;
+                outcome.written =
+                    render_plan(&scene, &mesh, &solution, plan, png, &photons, progress, &mut outcome.stats)?;
             }
         }
         Ok(())
@@ -189,6 +193,7 @@ impl Runner {
         &mut self,
         scene: &SceneDescription,
         solution_file: Option<&Path>,
+        photons: &RunPhotons,
         progress: &Progress,
         outcome: &mut Outcome,
     ) -> Result<(Mesh, Arc<Solution>), Failure> {
@@ -211,7 +216,7 @@ impl Runner {
             let black = Solution::black(&mesh, &scene.materials);
             return Ok((mesh, Arc::new(black)));
         }
-        let done = method.solve(scene, mesh, &mut self.reuse, progress)?;
+        let done = method.solve(scene, mesh, &mut self.reuse, photons, progress)?;
         outcome.stats.pass_one = done.stats;
         outcome.reused_form_factors = done.reused_form_factors;
         let solution = Arc::new(done.solution);
@@ -222,15 +227,17 @@ impl Runner {
     }
 }
 
-/// Pass one of a single run (see `Runner::pass_one`), adding what it measured to `stats`.
+/// Pass one of a single run (see `Runner::pass_one`), adding what it measured to `stats`; hand the
+/// same `photons` to `render`.
 pub fn pass_one(
     scene: &SceneDescription,
     solution_file: Option<&Path>,
+    photons: &RunPhotons,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> Result<(Mesh, Arc<Solution>), Failure> {
     let mut outcome = Outcome { stats: std::mem::take(stats), ..Default::default() };
-    let result = Runner::single().pass_one(scene, solution_file, progress, &mut outcome);
+    let result = Runner::single().pass_one(scene, solution_file, photons, progress, &mut outcome);
     *stats = outcome.stats;
     result
 }
@@ -318,12 +325,14 @@ pub fn write_image(image: &Image, path: &Path, png: &PngSettings) -> Result<(), 
 }
 
 /// Renders every planned output of one scene (each mode once) and writes them.
+#[allow(clippy::too_many_arguments)]
 pub fn render_plan(
     scene: &SceneDescription,
     mesh: &Mesh,
     solution: &Solution,
     plan: &[(TraceMode, PathBuf)],
     png: &PngSettings,
+    photons: &RunPhotons,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> Result<Vec<PathBuf>, Failure> {
@@ -332,7 +341,7 @@ pub fn render_plan(
     let mut rendered: Vec<(TraceMode, Image)> = Vec::new();
     for (mode, path) in plan {
         if !rendered.iter().any(|(m, _)| m == mode) {
-            let image = render(scene, mesh, &accel, solution, *mode, progress, stats)?;
+            let image = render(scene, mesh, &accel, solution, *mode, photons, progress, stats)?;
             rendered.push((*mode, image));
         }
         let image = &rendered
@@ -346,13 +355,16 @@ pub fn render_plan(
     Ok(written)
 }
 
-/// Pass two: traces the camera's rays through the scene and develops the film.
+/// Pass two: traces the camera's rays through the scene and develops the film; the final mode shows
+/// the run's `photons` as caustics.
+#[allow(clippy::too_many_arguments)]
 pub fn render(
     scene: &SceneDescription,
     mesh: &Mesh,
     accel: &Accel,
     solution: &Solution,
     mode: TraceMode,
+    photons: &RunPhotons,
     progress: &Progress,
     stats: &mut RunStats,
 ) -> Result<Image, TraceError> {
@@ -360,7 +372,14 @@ pub fn render(
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
     let tracer =
         Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?.with_shading_normals(&scene.surfaces);
-    let tracer = if mode == TraceMode::Final { tracer.with_caustics() } else { tracer };
+    let caustics = match mode {
+        TraceMode::Final => photons.get(mesh, accel, &scene.materials, &scene.surfaces),
+        TraceMode::Radiosity => None,
+    };
+    let tracer = match caustics {
+        Some(photons) => tracer.with_caustics(photons),
+        None => tracer,
+    };
     let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
     let stage = progress.stage(
         if mode == TraceMode::Final { "render final" } else { "render radiosity" },
@@ -371,9 +390,9 @@ pub fn render(
     let (picture, film_stats, counts) = film::render_with(
         image,
         RayCounts::default,
-        |counts: &mut RayCounts, x, y, rng| {
+        |counts: &mut RayCounts, x, y, sampler| {
             let ray = camera.ray(x, y);
-            tracer.radiance(ray.origin, ray.dir, mode, rng, counts)
+            tracer.radiance(ray.origin, ray.dir, mode, sampler, counts)
         },
         &|| stage.inc(1),
     );

@@ -10,6 +10,7 @@ use radray::run::{self, RunStats};
 use radray::scene::Overrides;
 use radray::scene::{DirectMode, FilterKind, SceneDescription};
 use radray::trace::TraceMode;
+use radray::transport::photons::RunPhotons;
 use std::path::{Path, PathBuf};
 
 fn root() -> &'static Path {
@@ -31,9 +32,13 @@ fn load(scene: &str) -> SceneDescription {
 fn render(scene: &SceneDescription, modes: &[TraceMode]) -> Vec<Image> {
     let progress = Progress::hidden();
     let mut stats = RunStats::default();
-    let (mesh, solution) = run::pass_one(scene, None, &progress, &mut stats).unwrap();
+    let photons = RunPhotons::default();
+    let (mesh, solution) = run::pass_one(scene, None, &photons, &progress, &mut stats).unwrap();
     let accel = radray::accel::Accel::build(&mesh.positions, &mesh.triangles);
-    modes.iter().map(|&m| run::render(scene, &mesh, &accel, &solution, m, &progress, &mut stats).unwrap()).collect()
+    modes
+        .iter()
+        .map(|&m| run::render(scene, &mesh, &accel, &solution, m, &photons, &progress, &mut stats).unwrap())
+        .collect()
 }
 
 fn reference(name: &str) -> Image {

@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 use radray::compare::{self, CompareError, PixelChannel};
+use radray::film::Sampler;
 use radray::film::{self, FilterSampler, Image};
 use radray::output::{self, OutputError, ToneCurve};
 use radray::rng::Pcg32;
@@ -82,12 +83,12 @@ fn normalised_weights_of_a_pixel_sum_to_one() {
     // (N ≤ 64 terms, relative error ≲ 64·2⁻⁵³ < 1e-12).
     for kind in ALL_FILTERS {
         for spp in [1u32, 7, 16, 64] {
-            let sampler = FilterSampler::new(kind, 2.0);
-            let mut rng = Pcg32::new(3, spp as u64);
+            let filter = FilterSampler::new(kind, 2.0);
+            let mut sampler = Sampler::independent(3, spp as u64);
             let (columns, rows) = film::stratum_grid(spp);
             let mut points = Vec::new();
-            film::multi_jittered(columns, rows, &mut rng, &mut points);
-            let weights: Vec<f64> = points.iter().map(|u| sampler.sample(*u).weight as f64).collect();
+            film::multi_jittered(columns, rows, &mut sampler, &mut points);
+            let weights: Vec<f64> = points.iter().map(|u| filter.sample(*u).weight as f64).collect();
             let total: f64 = weights.iter().sum();
             assert!(total > 0.0, "{kind:?} spp {spp}: Σw = {total}");
             let normalised_sum: f64 = weights.iter().map(|w| w / total).sum();
@@ -109,9 +110,9 @@ fn multi_jittered_puts_exactly_one_sample_in_each_stratum() {
     for count in [1u32, 2, 4, 7, 8, 12, 16, 64] {
         let (columns, rows) = film::stratum_grid(count);
         assert_eq!(columns * rows, count);
-        let mut rng = Pcg32::new(9, count as u64);
+        let mut sampler = Sampler::independent(9, count as u64);
         let mut points = Vec::new();
-        film::multi_jittered(columns, rows, &mut rng, &mut points);
+        film::multi_jittered(columns, rows, &mut sampler, &mut points);
         assert_eq!(points.len(), count as usize);
         let n = count as usize;
         let mut cells = vec![0; n];
@@ -170,10 +171,10 @@ fn box_filtered_edge_pixels_get_their_coverage_fraction() {
     }
 }
 
-/// A shader that uses its position and its RNG, so any change of sample order or stream shows.
-fn noisy_shader(x: f32, y: f32, rng: &mut Pcg32) -> Vec3 {
+/// A shader that uses its position and its sampler, so any change of sample order or stream shows.
+fn noisy_shader(x: f32, y: f32, sampler: &mut Sampler) -> Vec3 {
     let edge = if x + 0.3 * y < 20.0 { 1.0 } else { 0.1 };
-    Vec3::new(edge * rng.next_f32(), (x * 0.1).sin().abs(), (y * 0.07).cos().abs() + rng.next_f32())
+    Vec3::new(edge * sampler.next_1d(), (x * 0.1).sin().abs(), (y * 0.07).cos().abs() + sampler.next_1d())
 }
 
 fn render_in_pool(threads: usize, s: &ImageSettings) -> (Image, film::FilmStats) {

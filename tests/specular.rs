@@ -12,7 +12,8 @@ use radray::mesh::Mesh;
 use radray::radiosity::form_factors::{compute, compute_extended, FormFactors};
 use radray::radiosity::specular::{SpecularPaths, SPECULAR_RESOLUTION_PX};
 use radray::scene::{Material, SceneDescription};
-use radray::trace::optics::fresnel_dielectric;
+use radray::transport::optics::fresnel_dielectric;
+use radray::transport::photons::trace_photons;
 
 const DIFFUSE: u32 = 0;
 const EMITTER: u32 = 1;
@@ -263,9 +264,11 @@ fn diffuse_scenes_keep_plain_form_factors_bit_for_bit() {
 fn light_paths_give_the_mirror_images_form_factor() {
     let (s, mesh, emitter) = mirror_scene(0.5);
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
-    let paths = SpecularPaths::new(&mesh, &accel, &s.materials)
-        .with_shading_normals(&s.surfaces)
-        .with_light_paths(|count, trace| (0..count).map(trace).collect());
+    let photons =
+        trace_photons(&mesh, &accel, &s.materials, Some(&s.surfaces), |count, trace| (0..count).map(trace).collect())
+            .expect("a mirror and an emitter");
+    let paths =
+        SpecularPaths::new(&mesh, &accel, &s.materials).with_shading_normals(&s.surfaces).with_light_paths(&photons);
     let ff = compute_extended(&mesh, &hemicube_params(128), &paths, &|| {}).0;
     let image: Vec<Vec3> = emitter.iter().map(|v| Vec3::new(v.x, -v.y, v.z)).collect();
     let m = 20;

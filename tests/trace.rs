@@ -8,6 +8,7 @@ use std::f32::consts::PI;
 use common::{cornell_camera, emitter, glass, mirror, scene, solution, surface, z_quad};
 use glam::{vec3, Vec3};
 use radray::accel::Accel;
+use radray::film::Sampler;
 use radray::mesh::Mesh;
 use radray::radiosity::solution::Solution;
 use radray::rng::Pcg32;
@@ -59,9 +60,9 @@ impl Setup {
 }
 
 fn trace(tracer: &Tracer, origin: Vec3, dir: Vec3, mode: TraceMode) -> Vec3 {
-    let mut rng = Pcg32::new(1, 2);
+    let mut sampler = Sampler::independent(1, 2);
     let mut counts = RayCounts::default();
-    tracer.radiance(origin, dir, mode, &mut rng, &mut counts)
+    tracer.radiance(origin, dir, mode, &mut sampler, &mut counts)
 }
 
 /// |a − b| ≤ tol·max(|b|, 1) per channel.
@@ -253,7 +254,7 @@ fn total_internal_reflection_keeps_light_inside_glass() {
     // At 20° (below the critical angle) light gets out: 1 − R of the emitter's radiance.
     let theta = 20f32.to_radians();
     let l = trace(&tracer, vec3(0.0, 0.0, -0.5), vec3(theta.sin(), 0.0, theta.cos()), TraceMode::Final);
-    let expected = 1.0 - radray::trace::optics::fresnel_dielectric(theta.cos(), 1.5, 1.0);
+    let expected = 1.0 - radray::transport::optics::fresnel_dielectric(theta.cos(), 1.5, 1.0);
     assert!((l.x - expected).abs() < 1e-5, "{} vs {expected}", l.x);
 }
 
@@ -287,8 +288,8 @@ fn diffuse_only_scene_renders_the_same_in_both_modes() {
     for _ in 0..2000 {
         let origin = Vec3::splat(0.1) + random_vec(&mut rng) * 0.8;
         let dir = random_unit(&mut rng);
-        let a = tracer.radiance(origin, dir, TraceMode::Final, &mut rng.clone(), &mut counts);
-        let b = tracer.radiance(origin, dir, TraceMode::Radiosity, &mut rng.clone(), &mut counts);
+        let a = tracer.radiance(origin, dir, TraceMode::Final, &mut Sampler::Independent(rng.clone()), &mut counts);
+        let b = tracer.radiance(origin, dir, TraceMode::Radiosity, &mut Sampler::Independent(rng.clone()), &mut counts);
         assert_eq!(a, b, "ray {origin} {dir}");
         assert!(a.min_element() > 0.0, "a closed box has no escape: {a}");
     }
@@ -319,13 +320,13 @@ fn pixel_direct_light_matches_the_radiosity_direct_part_on_average() {
     assert!((tracer.emitter_area() - 4.0).abs() < 1e-6);
 
     // Average the per-pixel estimate over uniformly spread points of the floor.
-    let mut rng = Pcg32::new(11, 0);
+    let mut sampler = Sampler::independent(11, 0);
     let mut counts = RayCounts::default();
     let n = 20_000;
     let (mut sum, mut sum2) = (0.0f64, 0.0f64);
     for _ in 0..n {
-        let origin = vec3(rng.next_f32() * 2.0 - 1.0, 0.5, rng.next_f32() * 2.0 - 1.0);
-        let l = tracer.radiance(origin, Vec3::NEG_Y, TraceMode::Final, &mut rng, &mut counts);
+        let origin = vec3(sampler.next_1d() * 2.0 - 1.0, 0.5, sampler.next_1d() * 2.0 - 1.0);
+        let l = tracer.radiance(origin, Vec3::NEG_Y, TraceMode::Final, &mut sampler, &mut counts);
         // The three channels scale with Ke: compare one.
         assert!((l.y / l.x - 1.5).abs() < 1e-4 && (l.z / l.x - 2.0).abs() < 1e-4);
         sum += l.x as f64;

@@ -6,8 +6,6 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use rayon::prelude::*;
-
 use super::fingerprint;
 use super::matrix::{form_factors, FormFactors};
 use super::matrix_free;
@@ -19,6 +17,7 @@ use crate::accel::Accel;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
+use crate::transport::photons::RunPhotons;
 
 /// Why a method refuses a scene (before anything large is allocated).
 #[derive(Debug, thiserror::Error)]
@@ -72,12 +71,14 @@ pub trait PassOneMethod {
     }
 
     /// Solves the scene's radiosity on `mesh` (of `scene`, with emitters), reusing and leaving in
-    /// `reuse` what later jobs may share.
+    /// `reuse` what later jobs may share; light paths through mirrors and glass read the run's
+    /// `photons`, which pass two shares.
     fn solve(
         &self,
         scene: &SceneDescription,
         mesh: Mesh,
         reuse: &mut Reuse,
+        photons: &RunPhotons,
         progress: &Progress,
     ) -> Result<PassOne, MethodError>;
 }
@@ -118,11 +119,18 @@ pub fn specular_accel(scene: &SceneDescription, mesh: &Mesh) -> Option<Accel> {
 }
 
 /// How every method follows light through the scene's mirrors and glass: with the surfaces' shading
-/// normals, and with the photons traced from the emitters (in parallel) for the light paths.
-pub fn specular_paths<'a>(scene: &'a SceneDescription, mesh: &'a Mesh, accel: &'a Accel) -> SpecularPaths<'a> {
-    SpecularPaths::new(mesh, accel, &scene.materials)
-        .with_shading_normals(&scene.surfaces)
-        .with_light_paths(|count, trace| (0..count).into_par_iter().map(trace).collect())
+/// normals, and with the run's photons (traced from the emitters) for the light paths.
+pub fn specular_paths<'a>(
+    scene: &'a SceneDescription,
+    mesh: &'a Mesh,
+    accel: &'a Accel,
+    photons: &RunPhotons,
+) -> SpecularPaths<'a> {
+    let paths = SpecularPaths::new(mesh, accel, &scene.materials).with_shading_normals(&scene.surfaces);
+    match photons.get(mesh, accel, &scene.materials, &scene.surfaces) {
+        Some(photons) => paths.with_light_paths(photons),
+        None => paths,
+    }
 }
 
 /// Today's full matrix: hemicube form factors of every element stored as sparse rows (extended
@@ -141,6 +149,7 @@ impl FullMatrix {
         &self,
         scene: &SceneDescription,
         mesh: &Mesh,
+        photons: &RunPhotons,
         progress: &Progress,
         stats: &mut PassOneStats,
     ) -> FormFactors {
@@ -150,7 +159,7 @@ impl FullMatrix {
         let start = Instant::now();
         let ff = match &accel {
             Some(accel) => {
-                let paths = specular_paths(scene, mesh, accel);
+                let paths = specular_paths(scene, mesh, accel, photons);
                 let (ff, specular_stats) = form_factors::compute_extended(mesh, params, &paths, &|| stage.inc(1));
                 stats.specular_pixels = specular_stats.pixels;
                 stats.specular_rays = specular_stats.rays;
@@ -250,6 +259,7 @@ impl PassOneMethod for FullMatrix {
         scene: &SceneDescription,
         mesh: Mesh,
         reuse: &mut Reuse,
+        photons: &RunPhotons,
         progress: &Progress,
     ) -> Result<PassOne, MethodError> {
         let mut stats = PassOneStats { elements: mesh.elements.len(), ..Default::default() };
@@ -260,7 +270,7 @@ impl PassOneMethod for FullMatrix {
             _ => {
                 reuse.form_factors = None; // free the previous scene's matrix first
                 self.check_memory(scene, &mesh)?;
-                let ff = Arc::new(self.compute_form_factors(scene, &mesh, progress, &mut stats));
+                let ff = Arc::new(self.compute_form_factors(scene, &mesh, photons, progress, &mut stats));
                 if let Some(key) = key {
                     reuse.form_factors = Some((key, ff.clone()));
                 }
@@ -292,6 +302,7 @@ impl PassOneMethod for MatrixFree {
         scene: &SceneDescription,
         mesh: Mesh,
         _reuse: &mut Reuse,
+        photons: &RunPhotons,
         progress: &Progress,
     ) -> Result<PassOne, MethodError> {
         let params = &scene.radiosity;
@@ -300,7 +311,7 @@ impl PassOneMethod for MatrixFree {
         // Progress in per mille of the emitted power shot (the unshot fraction falls from 1 to 0).
         let stage = progress.stage("shooting (matrix-free)", 1000, "‰ shot");
         let start = Instant::now();
-        let paths = accel.as_ref().map(|a| specular_paths(scene, &mesh, a));
+        let paths = accel.as_ref().map(|a| specular_paths(scene, &mesh, a, photons));
         let solved = matrix_free::solve(&mesh, params, paths.as_ref(), &mut |shots, unshot_fraction| {
             stage.set_position(((1.0 - unshot_fraction).clamp(0.0, 1.0) * 1000.0) as u64);
             stage.set_message(format!("{shots} shots, unshot {unshot_fraction:.2e}"));

@@ -9,16 +9,15 @@ use crate::accel::Accel;
 use crate::mesh::Mesh;
 use crate::rng::Pcg32;
 use crate::scene::{Material, Surface};
-use crate::trace::caustics::{trace_photons, Landing};
-use crate::trace::optics::{fresnel_dielectric, reflect, refract};
+use crate::transport::hit::{ray_offset, scene_scale};
+use crate::transport::ray_stack::RayStack;
+use crate::transport::scatter::scatter;
+use crate::transport::{Photons, SurfaceHit};
 
 /// Deepest specular chain followed from a hemicube pixel (bounces off or through specular surfaces).
 pub const MAX_DEPTH: u32 = 8;
-/// Branches whose throughput (mean over RGB) falls below this are dropped.
+/// Branches are dropped when their throughput falls below this (`transport::scatter::carries`).
 pub const MIN_THROUGHPUT: f32 = 1e-3;
-/// Ray origins leave a surface by this fraction of the scene's size, as in pass two
-/// (`trace::whitted`).
-const RELATIVE_OFFSET: f32 = 1e-5;
 /// Resolution at which the specular part of a hemicube is sampled: the hemicube's pixels are grouped
 /// in blocks of s × s with s = max(1, N / SPECULAR_RESOLUTION_PX), and one path per block carries the
 /// summed ΔF of the block's specular pixels (from one of them, chosen uniformly by a generator seeded
@@ -54,14 +53,6 @@ impl std::ops::AddAssign for SpecularStats {
     }
 }
 
-#[derive(Clone, Copy, Debug, Default)]
-struct StackRay {
-    origin: Vec3,
-    dir: Vec3,
-    throughput: Vec3,
-    depth: u32,
-}
-
 /// The scene as the specular path follower sees it: triangles in a BVH, materials per element, and
 /// (optionally) the surfaces' shading normals. Shared between threads (`&self`).
 pub struct SpecularPaths<'a> {
@@ -93,15 +84,6 @@ impl<'a> SpecularPaths<'a> {
         let pure_specular = (0..e.len())
             .map(|i| specular[i] && e.reflectance[i].max_element() <= 0.0 && e.emission[i].max_element() <= 0.0)
             .collect();
-        let (lo, hi) = mesh
-            .positions
-            .iter()
-            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-        let scale = if mesh.positions.is_empty() {
-            1.0
-        } else {
-            lo.abs().max(hi.abs()).max_element().max((hi - lo).max_element()).max(f32::MIN_POSITIVE)
-        };
         SpecularPaths {
             mesh,
             accel,
@@ -109,7 +91,7 @@ impl<'a> SpecularPaths<'a> {
             surfaces: None,
             specular,
             pure_specular,
-            offset: RELATIVE_OFFSET * scale,
+            offset: ray_offset(scene_scale(mesh)),
             emitter: e.emission.iter().map(|x| x.max_element() > 0.0).collect(),
             light_rows: None,
         }
@@ -123,8 +105,8 @@ impl<'a> SpecularPaths<'a> {
     }
 
     /// Extended form factors to the emitters from light traced from the emitters (Arvo 1986) instead
-    /// of from the receivers' hemicubes: the photons of `trace::caustics::trace_photons` (the same
-    /// ones pass two's caustic map uses) give, for receiver i and emitter j,
+    /// of from the receivers' hemicubes: the run's `photons` (`transport::photons`, the same ones pass
+    /// two's caustic map uses) give, for receiver i and emitter j,
     ///
     /// Fˢ_ij = Σ_{photons from j landing on i} w̄_k / (π A_i),
     ///
@@ -133,16 +115,9 @@ impl<'a> SpecularPaths<'a> {
     /// B_j = π L_j. A small focused caustic is sampled densely from the light but only by a few
     /// hemicube blocks of each receiver; and pass one then holds exactly the element average of the
     /// caustic that pass two sharpens. `extend_row` stops following hemicube paths into emitters.
-    /// Call after `with_shading_normals`; `run_batches` maps the photon batches (in parallel at the
-    /// call site). Assumes emitters are not also lit through specular paths in a way that matters
-    /// (their reflected light, Kd·irradiance, is then not carried along LS+D paths).
-    pub fn with_light_paths(
-        mut self,
-        run_batches: impl Fn(u32, &(dyn Fn(u32) -> (Vec<Landing>, u64) + Sync)) -> Vec<(Vec<Landing>, u64)>,
-    ) -> Self {
-        let Some(photons) = trace_photons(self.mesh, self.accel, self.materials, self.surfaces, run_batches) else {
-            return self;
-        };
+    /// Assumes emitters are not also lit through specular paths in a way that matters (their reflected
+    /// light, Kd·irradiance, is then not carried along LS+D paths).
+    pub fn with_light_paths(mut self, photons: &Photons) -> Self {
         let e = &self.mesh.elements;
         let mut flux: Vec<Vec<(u32, f64)>> = vec![Vec::new(); e.len()];
         for l in &photons.landings {
@@ -185,36 +160,28 @@ impl<'a> SpecularPaths<'a> {
     /// mirror: T ← T·Ks;  dielectric: reflected T ← T·Ks·R, refracted T ← T·(1 − R)·(1 − d),
     ///
     /// R the unpolarised Fresnel reflectance (entering or leaving by the side hit; total internal
-    /// reflection gives R = 1 and no refracted branch). Whenever a later segment hits the front of an
+    /// reflection gives R = 1 and no refracted branch; `transport::scatter`). Whenever a later segment hits the front of an
     /// element that is not pure specular (or the back of a two-sided one), `reach(j, T̄)` is called with
     /// T̄ the branch's mean throughput over RGB; the branch ends there unless that element is also
     /// specular. The back of a one-sided opaque surface absorbs. Branches end after `MAX_DEPTH` bounces
-    /// or below `MIN_THROUGHPUT`. With `first_hit_counts`, a first hit on a non-specular element (the
+    /// or below `MIN_THROUGHPUT` (`transport::scatter::carries`). With `first_hit_counts`, a first hit on a non-specular element (the
     /// ray and the rasteriser disagreeing about a pixel on an edge) reaches it with T = 1, so that a
     /// pixel whose plain entry was dropped keeps its ΔF. Returns the rays traced.
     pub fn follow(&self, origin: Vec3, dir: Vec3, first_hit_counts: bool, mut reach: impl FnMut(u32, f32)) -> u64 {
         let mesh = self.mesh;
-        let elements = &mesh.elements;
-        let mut stack = [StackRay::default(); STACK_SIZE];
-        stack[0] = StackRay { origin, dir: dir.normalize(), throughput: Vec3::ONE, depth: 0 };
-        let mut len = 1;
+        let mut stack = RayStack::<STACK_SIZE>::new(origin, dir);
         let mut rays = 0;
-        while len > 0 {
-            len -= 1;
-            let ray = stack[len];
+        while let Some(ray) = stack.pop() {
             rays += 1;
             let Some(hit) = self.accel.closest_hit(ray.origin, ray.dir, 0.0, f32::INFINITY) else {
                 continue;
             };
-            let t = hit.triangle as usize;
-            let front_element = mesh.triangle_element[t] as usize;
-            let normal = elements.normal[front_element];
-            let front = ray.dir.dot(normal) < 0.0;
-            let side = mesh.side_element(t, front);
-            let Some(material) = self.materials.get(elements.material[front_element] as usize) else {
+            let hit = SurfaceHit::new(mesh, &hit, ray.dir);
+            let front_element = hit.front_element as usize;
+            let Some(material) = self.materials.get(hit.material as usize) else {
                 continue;
             };
-            match side {
+            match hit.element.map(|j| j as usize) {
                 // The first hit is the specular element the hemicube pixel showed: its plain entry holds
                 // whatever diffuse light it has.
                 Some(j) if !self.pure_specular[j] && (ray.depth > 0 || (first_hit_counts && !self.specular[j])) => {
@@ -227,44 +194,8 @@ impl<'a> SpecularPaths<'a> {
             if !self.specular[front_element] || ray.depth >= MAX_DEPTH {
                 continue;
             }
-            let facing = if front { normal } else { -normal };
-            let bary = [1.0 - hit.u - hit.v, hit.u, hit.v];
-            let [i0, i1, i2] = mesh.triangles[t];
-            let p = mesh.positions[i0 as usize] * bary[0]
-                + mesh.positions[i1 as usize] * bary[1]
-                + mesh.positions[i2 as usize] * bary[2];
-            let shading = self
-                .surfaces
-                .map_or(facing, |surfaces| mesh.shading_normal(surfaces, front_element, p, facing, ray.dir));
-            let above = p + facing * self.offset;
-            let mut push = |origin: Vec3, dir: Vec3, throughput: Vec3| {
-                if throughput.element_sum() / 3.0 >= MIN_THROUGHPUT {
-                    assert!(len < STACK_SIZE, "specular stack overflow: depth is bounded so this cannot happen");
-                    stack[len] = StackRay { origin, dir, throughput, depth: ray.depth + 1 };
-                    len += 1;
-                }
-            };
-            if material.is_dielectric() {
-                let (eta_i, eta_t) = if front { (1.0, material.ior) } else { (material.ior, 1.0) };
-                let reflectance = fresnel_dielectric(-ray.dir.dot(shading), eta_i, eta_t);
-                push(
-                    above,
-                    mirror(ray.dir, shading, facing),
-                    ray.throughput * material.specular_reflectance * reflectance,
-                );
-                if reflectance < 1.0 {
-                    if let Some(refracted) = refract(ray.dir, shading, eta_i / eta_t).filter(|t| t.dot(facing) < 0.0) {
-                        let below = p - facing * self.offset;
-                        push(
-                            below,
-                            refracted.normalize(),
-                            ray.throughput * ((1.0 - reflectance) * material.transmittance),
-                        );
-                    }
-                }
-            } else if material.specular_reflectance.max_element() > 0.0 {
-                push(above, mirror(ray.dir, shading, facing), ray.throughput * material.specular_reflectance);
-            }
+            let hit = hit.with_shading_normal(mesh, self.surfaces, ray.dir);
+            stack.push_branches(&ray, &scatter(material, ray.dir, &hit), &hit, self.offset, MIN_THROUGHPUT);
         }
         rays
     }
@@ -358,16 +289,5 @@ impl<'a> SpecularPaths<'a> {
             }
         }
         stats
-    }
-}
-
-/// Mirror direction of `d` about the shading normal, or about the geometric normal `facing` when the
-/// shading normal would send it below the surface (as in `trace::whitted`).
-fn mirror(d: Vec3, shading: Vec3, facing: Vec3) -> Vec3 {
-    let r = reflect(d, shading);
-    if r.dot(facing) > 0.0 {
-        r
-    } else {
-        reflect(d, facing)
     }
 }

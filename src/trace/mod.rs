@@ -1,13 +1,15 @@
 //! Pass two: a Whitted ray tracer (Whitted 1980) whose diffuse term is the radiosity solution.
-//! `camera` makes primary rays, `optics` holds the reflection/refraction formulas, and `whitted` the
-//! ray-stack tracer that the film calls once per sample.
+//! `camera` makes primary rays, `diffuse` reads the solution back at a hit, `caustics` sharpens the
+//! light that reached diffuse surfaces through mirrors and glass, and `whitted` is the ray-stack tracer
+//! that the film calls once per sample. The specular rules live in `transport`, shared with pass one.
 
 pub mod camera;
 pub mod caustics;
-pub mod optics;
+pub mod diffuse;
 pub mod whitted;
 
 pub use camera::PinholeCamera;
+pub use diffuse::{Diffuse, DiffuseEstimator};
 pub use whitted::{RayCounts, TraceError, TraceMode, Tracer};
 
 use glam::Vec3;

@@ -1,0 +1,136 @@
+//! Where a ray meets the mesh, seen from the side it arrives on: the one reconstruction of a hit point,
+//! its normals, element and material for both passes, and the scene-scale distance by which new rays
+//! leave a surface.
+
+use glam::{Vec2, Vec3};
+
+use crate::accel::Hit;
+use crate::mesh::{Mesh, NONE};
+use crate::scene::Surface;
+
+/// Ray origins are moved off surfaces by this fraction of the scene's size (`scene_scale`): about
+/// 100 ulps of the coordinates, far below any feature size.
+pub const RELATIVE_OFFSET: f32 = 1e-5;
+
+/// The scene's size: the largest of its coordinate magnitudes and of its extents along the axes
+/// (1 for an empty mesh). Offsets and kernel radii are fractions of it.
+pub fn scene_scale(mesh: &Mesh) -> f32 {
+    if mesh.positions.is_empty() {
+        return 1.0;
+    }
+    let (lo, hi) = mesh
+        .positions
+        .iter()
+        .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    lo.abs().max(hi.abs()).max_element().max((hi - lo).max_element()).max(f32::MIN_POSITIVE)
+}
+
+/// Distance by which ray origins leave a surface of a scene of size `scale`: `RELATIVE_OFFSET · scale`.
+pub fn ray_offset(scale: f32) -> f32 {
+    RELATIVE_OFFSET * scale
+}
+
+/// A ray's closest hit on the mesh, seen from the side the ray arrives on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    /// The hit point p = b₀v₀ + b₁v₁ + b₂v₂ on the triangle.
+    pub position: Vec3,
+    /// The triangle's geometric normal turned towards the arriving ray: it decides the side and
+    /// offsets new ray origins.
+    pub geometric_normal: Vec3,
+    /// The normal that bends specular rays: the geometric one unless `with_shading_normal` found the
+    /// surface's smooth-shading normal.
+    pub shading_normal: Vec3,
+    /// Index into `Mesh::triangles`.
+    pub triangle: u32,
+    /// The ray arrives on the side the triangle's normal points to.
+    pub front: bool,
+    /// The element that owns the triangle (its front side); the material is read from it.
+    pub front_element: u32,
+    /// The element on the side hit; `None` behind a one-sided surface.
+    pub element: Option<u32>,
+    /// The mesh surface (`Elements::surface`) of the side hit (of the front side when there is none).
+    pub surface: u32,
+    /// The corners of the side hit (`Mesh::triangle_back_vertices` on a back side), for Gouraud
+    /// interpolation of per-vertex values at `bary`.
+    pub vertices: [u32; 3],
+    /// Barycentrics (b₀, b₁, b₂) of `position` on the triangle.
+    pub bary: [f32; 3],
+    /// Texture coordinates at the hit. The mesh carries none yet, so this is (0, 0) until textures
+    /// are read from the scene.
+    pub uv: Vec2,
+    /// Material index (`Elements::material` of `front_element`).
+    pub material: u32,
+}
+
+impl SurfaceHit {
+    /// The hit `hit` of a ray with direction `dir` on `mesh` (whose triangles the accelerator was
+    /// built from).
+    pub fn new(mesh: &Mesh, hit: &Hit, dir: Vec3) -> SurfaceHit {
+        let t = hit.triangle as usize;
+        let elements = &mesh.elements;
+        let front_element = mesh.triangle_element[t];
+        let normal = elements.normal[front_element as usize];
+        let front = dir.dot(normal) < 0.0;
+        let (element, vertices) = if front {
+            (Some(front_element), mesh.triangles[t])
+        } else if mesh.triangle_back_element[t] != NONE {
+            (Some(mesh.triangle_back_element[t]), mesh.triangle_back_vertices[t])
+        } else {
+            (None, mesh.triangles[t])
+        };
+        let bary = [1.0 - hit.u - hit.v, hit.u, hit.v];
+        let [i0, i1, i2] = mesh.triangles[t];
+        let position = mesh.positions[i0 as usize] * bary[0]
+            + mesh.positions[i1 as usize] * bary[1]
+            + mesh.positions[i2 as usize] * bary[2];
+        let facing = if front { normal } else { -normal };
+        SurfaceHit {
+            position,
+            geometric_normal: facing,
+            shading_normal: facing,
+            triangle: hit.triangle,
+            front,
+            front_element,
+            element,
+            surface: elements.surface[element.unwrap_or(front_element) as usize],
+            vertices,
+            bary,
+            uv: Vec2::ZERO,
+            material: elements.material[front_element as usize],
+        }
+    }
+
+    /// Sets the shading normal from the surfaces' smooth-shading normals (`Mesh::shading_normal`, the
+    /// scene the mesh was built from) for a ray arriving along `incoming`; keeps the geometric normal
+    /// without `surfaces`.
+    pub fn with_shading_normal(mut self, mesh: &Mesh, surfaces: Option<&[Surface]>, incoming: Vec3) -> SurfaceHit {
+        if let Some(surfaces) = surfaces {
+            self.shading_normal = mesh.shading_normal(
+                surfaces,
+                self.front_element as usize,
+                self.position,
+                self.geometric_normal,
+                incoming,
+            );
+        }
+        self
+    }
+
+    /// Origin of a ray leaving on the side the ray arrived from: p + offset·n_g.
+    pub fn above(&self, offset: f32) -> Vec3 {
+        self.position + self.geometric_normal * offset
+    }
+
+    /// Origin of a ray going through the surface: p − offset·n_g.
+    pub fn below(&self, offset: f32) -> Vec3 {
+        self.position - self.geometric_normal * offset
+    }
+
+    /// Gouraud interpolation of per-vertex `values` over the side hit: Σ_k b_k·values[v_k].
+    pub fn interpolate(&self, values: &[Vec3]) -> Vec3 {
+        values[self.vertices[0] as usize] * self.bary[0]
+            + values[self.vertices[1] as usize] * self.bary[1]
+            + values[self.vertices[2] as usize] * self.bary[2]
+    }
+}

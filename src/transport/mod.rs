@@ -1,0 +1,16 @@
+//! Light transport shared by both passes: where a ray meets a surface (`hit`), the specular rules of
+//! mirrors and glass (`scatter`, with the pure formulas in `optics`), choosing points on the emitters
+//! (`emitters`), and the photons traced once per run from the emitters through specular surfaces
+//! (`photons`). Pass one (radiosity) and pass two (trace) both read from here; nothing here reads from
+//! either pass.
+
+pub mod emitters;
+pub mod hit;
+pub mod optics;
+pub mod photons;
+pub mod ray_stack;
+pub mod scatter;
+
+pub use hit::SurfaceHit;
+pub use photons::Photons;
+pub use scatter::Scatter;

@@ -1,0 +1,131 @@
+//! The specular rules of smooth surfaces, written once for both passes (Whitted 1980): a mirror
+//! reflects with its Ks; a dielectric reflects with Ks·R and refracts with (1 − R)·(1 − d), R the
+//! unpolarised Fresnel reflectance; and the one throughput cutoff that ends a branch.
+
+use glam::Vec3;
+
+use super::hit::SurfaceHit;
+use super::optics::{fresnel_dielectric, reflect, refract};
+use crate::scene::Material;
+
+/// What a smooth surface does to a ray that meets it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scatter {
+    /// Neither mirror nor glass: no specular branch.
+    None,
+    /// A mirror: one reflected branch with weight Ks.
+    Mirror { dir: Vec3, reflectance: Vec3 },
+    /// A smooth dielectric: a reflected branch with weight Ks·R and, unless light cannot leave on the
+    /// other side (total internal reflection, or a shading normal that allows no refraction), a
+    /// refracted branch with weight (1 − R)·(1 − d).
+    Dielectric {
+        reflected: Vec3,
+        refracted: Option<Vec3>,
+        /// R, the unpolarised Fresnel reflectance (`fresnel_dielectric`).
+        fresnel: f32,
+        /// Ks.
+        reflectance: Vec3,
+        /// 1 − d.
+        transmittance: f32,
+    },
+}
+
+/// One ray leaving a specular surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Branch {
+    pub dir: Vec3,
+    /// The ray goes through the surface (its origin is below it, `SurfaceHit::below`).
+    pub transmitted: bool,
+    /// The path's throughput after the surface.
+    pub throughput: Vec3,
+}
+
+impl Branch {
+    /// Where the branch's ray starts, `offset` off the surface on the side it leaves by.
+    pub fn origin(&self, hit: &SurfaceHit, offset: f32) -> Vec3 {
+        if self.transmitted {
+            hit.below(offset)
+        } else {
+            hit.above(offset)
+        }
+    }
+}
+
+/// The specular response of `material` to a ray of unit direction `dir` at `hit`: directions from the
+/// shading normal n_s (mirror: r = d − 2(d·n_s)n_s, falling back to the geometric normal when r would
+/// leave below the surface; refraction by Snell's law with η_i/η_t = 1/Ni entering, Ni leaving), and
+/// R = `fresnel_dielectric`(−d·n_s, η_i, η_t).
+pub fn scatter(material: &Material, dir: Vec3, hit: &SurfaceHit) -> Scatter {
+    let (shading, facing) = (hit.shading_normal, hit.geometric_normal);
+    if material.is_dielectric() {
+        let (eta_i, eta_t) = if hit.front { (1.0, material.ior) } else { (material.ior, 1.0) };
+        let fresnel = fresnel_dielectric(-dir.dot(shading), eta_i, eta_t);
+        Scatter::Dielectric {
+            reflected: mirror(dir, shading, facing),
+            refracted: refract(dir, shading, eta_i / eta_t).filter(|t| t.dot(facing) < 0.0).map(Vec3::normalize),
+            fresnel,
+            reflectance: material.specular_reflectance,
+            transmittance: material.transmittance,
+        }
+    } else if material.specular_reflectance.max_element() > 0.0 {
+        Scatter::Mirror { dir: mirror(dir, shading, facing), reflectance: material.specular_reflectance }
+    } else {
+        Scatter::None
+    }
+}
+
+impl Scatter {
+    /// Both branches of a path with throughput T (Whitted's tree): mirror T·Ks; dielectric reflected
+    /// T·Ks·R and, when R < 1, refracted T·(1 − R)·(1 − d). The reflected branch comes first.
+    pub fn split(&self, throughput: Vec3) -> [Option<Branch>; 2] {
+        match *self {
+            Scatter::None => [None, None],
+            Scatter::Mirror { dir, reflectance } => {
+                [Some(Branch { dir, transmitted: false, throughput: throughput * reflectance }), None]
+            }
+            Scatter::Dielectric { reflected, refracted, fresnel, reflectance, transmittance } => [
+                Some(Branch { dir: reflected, transmitted: false, throughput: throughput * reflectance * fresnel }),
+                refracted.filter(|_| fresnel < 1.0).map(|dir| Branch {
+                    dir,
+                    transmitted: true,
+                    throughput: throughput * ((1.0 - fresnel) * transmittance),
+                }),
+            ],
+        }
+    }
+
+    /// One branch by Russian roulette (a photon keeps a single path): a dielectric that can refract
+    /// reflects with probability R, drawn as `u() < R` (u uniform in [0, 1), drawn only then), so the
+    /// weights divided by their probabilities are Ks and 1 − d; one that cannot refract reflects with
+    /// Ks·R. Returns (direction, transmitted, factor): the new throughput is T·factor.
+    pub fn choose(&self, u: impl FnOnce() -> f32) -> Option<(Vec3, bool, Vec3)> {
+        match *self {
+            Scatter::None => None,
+            Scatter::Mirror { dir, reflectance } => Some((dir, false, reflectance)),
+            Scatter::Dielectric { reflected, refracted, fresnel, reflectance, transmittance } => match refracted {
+                Some(dir) if u() >= fresnel => Some((dir, true, Vec3::splat(transmittance))),
+                Some(_) => Some((reflected, false, reflectance)),
+                None => Some((reflected, false, reflectance * fresnel)),
+            },
+        }
+    }
+}
+
+/// The one cutoff rule: a branch is followed while the largest channel of its throughput is positive
+/// and at least `min_throughput`. The largest channel, not the mean, so that a strongly tinted path
+/// (red glass) is not dropped while one of its channels still carries light.
+pub fn carries(throughput: Vec3, min_throughput: f32) -> bool {
+    let largest = throughput.max_element();
+    largest > 0.0 && largest >= min_throughput
+}
+
+/// Mirror direction of `d` about the shading normal, or about the geometric normal `facing` when the
+/// shading normal would send it below the surface.
+pub fn mirror(d: Vec3, shading: Vec3, facing: Vec3) -> Vec3 {
+    let r = reflect(d, shading);
+    if r.dot(facing) > 0.0 {
+        r
+    } else {
+        reflect(d, facing)
+    }
+}
