@@ -2,7 +2,7 @@
 """Make (or preview) a converged Mitsuba 3 reference for a radray scene whose geometry is one OBJ.
 
 usage: python3 references/make_reference.py SCENE.toml SPP [--name NAME] [--seed S] [--preview OUT.exr]
-                                             [--pass-spp 128] [--budget-s SECONDS] [--variant llvm_ad_rgb]
+                                             [--pass-spp 128] [--budget-s SECONDS] [--resume] [--variant llvm_ad_rgb]
 
 Without --preview it fills references/NAME/ (NAME defaults to the TOML file's stem):
   scene.obj, scene.mtl (+ textures/)  copied unchanged from the scene's [[mesh]] obj folder
@@ -11,7 +11,9 @@ Without --preview it fills references/NAME/ (NAME defaults to the TOML file's st
                                       rendered as alternating passes of --pass-spp samples (A with seeds
                                       2S*100003+k, B with (2S+1)*100003+k); with --budget-s the passes stop
                                       once that much render time is spent, so SPP is a cap (the noise
-                                      file records the samples actually taken)
+                                      file records the samples actually taken). The two running sums are
+                                      kept in references/.cache/NAME.npz (not committed); --resume adds
+                                      passes to them (with the next seeds) when the scene is unchanged
   reference.png                       clamped, sRGB preview
   reference_noise.json                residual noise, estimated from the two halves A and B (SPP/2 each):
       the full image's error is estimated by (A - B)/2 (its variance is var(A - B)/4), so
@@ -72,6 +74,19 @@ def copy_scene(obj, out):
         shutil.copytree(os.path.join(src, "textures"), os.path.join(out, "textures"))
 
 
+def scene_key(folder, seed):
+    """A digest of everything the image depends on, so that --resume never mixes two scenes."""
+    import hashlib
+    h = hashlib.sha256(str(seed).encode())
+    for root, _, files in sorted(os.walk(folder)):
+        for f in sorted(files):
+            if f.startswith("reference") or ".mitsuba_cache" in root:
+                continue
+            h.update(f.encode())
+            h.update(open(os.path.join(root, f), "rb").read())
+    return h.hexdigest()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("toml")
@@ -81,6 +96,7 @@ def main():
     ap.add_argument("--preview")
     ap.add_argument("--pass-spp", type=int, default=128)
     ap.add_argument("--budget-s", type=float, default=None)
+    ap.add_argument("--resume", action="store_true")
     ap.add_argument("--variant")
     a = ap.parse_args()
     name = a.name or os.path.splitext(os.path.basename(a.toml))[0]
@@ -108,6 +124,13 @@ def main():
         return
     half_cap = a.spp // 2
     acc, times, half, k = [0.0, 0.0], [0.0, 0.0], 0, 0
+    cache = os.path.join(HERE, ".cache", name + ".npz")
+    key = scene_key(out, a.seed)
+    if a.resume and os.path.exists(cache):
+        c = np.load(cache)
+        if str(c["key"]) == key:
+            acc, times, half, k = [c["accA"], c["accB"]], list(c["times"]), int(c["half"]), int(c["k"])
+            print("resuming at %d spp per half" % half, file=sys.stderr, flush=True)
     t_start = time.perf_counter()
     while half < half_cap:
         n = min(a.pass_spp, half_cap - half)
@@ -117,6 +140,9 @@ def main():
             times[h] += time.perf_counter() - t
         half += n
         k += 1
+        os.makedirs(os.path.dirname(cache), exist_ok=True)
+        np.savez(cache + ".tmp.npz", accA=acc[0], accB=acc[1], times=np.array(times), half=half, k=k, key=key)
+        os.replace(cache + ".tmp.npz", cache)
         print("%d spp per half, %.0f s" % (half, time.perf_counter() - t_start), file=sys.stderr, flush=True)
         if a.budget_s and time.perf_counter() - t_start > a.budget_s:
             break
