@@ -10,6 +10,8 @@ For each room and quality preset it runs, one process at a time (never two scene
 under /usr/bin/time (user + system CPU seconds, wall seconds, peak RSS), then
   radray compare OUT/... references/ROOM/reference.exr --json
 and prints a Markdown table of relMSE, CPU seconds and wall seconds, plus OUT/baseline.json.
+relMSE against a reference includes the reference's own noise: subtract `relMSE_ref` of
+references/ROOM/reference_noise.json for an estimate against the converged image.
 Images are 256x256 as the scene files say. CPU seconds are the honest figure on a shared machine;
 wall seconds depend on the load (recorded as the 1-minute load average).
 """
@@ -60,6 +62,7 @@ def main():
                     except RuntimeError as e:  # e.g. a scene this binary refuses: record the message
                         rec = {"error": str(e)}
                         results[key] = rec
+                        json.dump(results, open(results_path, "w"), indent=1)
                         print("%-28s %s" % (key, e), file=sys.stderr, flush=True)
                         continue
                     rec = {"cpu_s": cpu, "wall_s": wall, "peak_rss_mib": rss, "load1": os.getloadavg()[0]}
