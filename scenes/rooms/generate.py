@@ -1,0 +1,522 @@
+#!/usr/bin/env python3
+"""Generates the test rooms: interiors that are deliberately NOT Cornell boxes, for measuring radray
+against converged path-traced references (references/<name>/, made by references/make_reference.py).
+
+    python3 scenes/rooms/generate.py          # deterministic, no network; needs numpy and Pillow
+
+Writes, for each room NAME: scenes/rooms/NAME/scene.obj + scene.mtl (+ textures/), and the radray
+scene file scenes/rooms/NAME.toml (camera, 256x256 image; radiosity settings are left to the
+quality preset on purpose, so that no room is tuned by hand).
+
+Rooms (unit: metres, y up):
+  l_room       an L-shaped room lit by a rectangular emitter on a wall, a table (top + four legs) and
+               a cabinet standing against the walls, seen by a slightly rolled camera;
+  gap_room     two rooms joined by a narrow door gap; the only light is a ceiling panel in the far
+               room and the camera stands in the dark room, so all light it sees came through the gap;
+  alcove_hall  a hall with concave corners: two alcoves, a wall niche with a sill, two pillars, a low
+               ceiling beam, a ceiling light and coloured walls (colour bleeding);
+  textured_box a Cornell-like box with a photo-like texture on the back wall (map_Kd with Kd 1), a
+               checker floor (Kd 0.8 x map_Kd) and a JPEG wood texture on the tall block.
+
+Conventions (as every radray scene): right-handed; every polygon is counter-clockwise seen from its
+front, and every surface is one-sided and faces into the room (room shells inwards, furniture
+outwards). Emitters have Kd 0 and Ke = emitted radiance. All Kd (and Kd x texel) <= 0.8. Faces that
+can never be seen (a box's face resting on the floor or against a wall) are left out, so furniture
+touches the floor and walls along open edges: exactly where light leaks would show.
+
+Room shells are built from a floor plan of cells on a non-uniform grid: every occupied cell is a
+vertical column [y0, y1] (floor and ceiling height), walls are the parts of a cell's side that its
+neighbour does not cover. This gives alcoves (columns outside the main plan), niches (raised floor,
+lowered ceiling), pillars (empty cells), beams (a row of lower ceilings) and door gaps (a lower
+column through a wall), with shared edges conforming wherever the grid lines meet.
+"""
+import math
+import os
+import shutil
+
+import numpy as np
+from PIL import Image
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+# ----------------------------------------------------------------------------------------- geometry
+def sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def normalize(a):
+    n = math.sqrt(dot(a, a))
+    return (a[0] / n, a[1] / n, a[2] / n)
+
+
+class Model:
+    """Faces grouped into named objects (one material each), with optional per-corner UVs."""
+
+    def __init__(self):
+        self.objects = {}  # name -> (material, [(points, uvs or None)])
+        self.order = []
+        self.materials = {}  # name -> dict of MTL statements (in order)
+
+    def material(self, name, **kw):
+        self.materials[name] = kw
+
+    def face(self, obj, mat, pts, uvs=None, expect_normal=None):
+        """A planar convex polygon, counter-clockwise seen from its front. `expect_normal`, if given, is
+        checked against the winding (guards every hand-written corner order)."""
+        if expect_normal is not None:
+            n = cross(sub(pts[1], pts[0]), sub(pts[2], pts[0]))
+            assert dot(n, expect_normal) > 0, (obj, pts, expect_normal)
+        key = obj if obj not in self.objects or self.objects[obj][0] == mat else obj + "_" + mat
+        if key not in self.objects:
+            self.objects[key] = (mat, [])
+            self.order.append(key)
+        self.objects[key][1].append(([tuple(float(c) for c in p) for p in pts], uvs))
+
+    def rect(self, obj, mat, o, u, v, uv_of=None):
+        """Parallelogram o, o+u, o+u+v, o+v; its front normal is u x v."""
+        pts = [o, add(o, u), add(add(o, u), v), add(o, v)]
+        self.face(obj, mat, pts, [uv_of(p) for p in pts] if uv_of else None, cross(u, v))
+
+    def box(self, obj, mat, lo, hi, omit=(), uv_per_face=False):
+        """Axis-aligned box facing outwards; `omit` names faces to leave out: '-x', '+x', '-y', ..."""
+        (x0, y0, z0), (x1, y1, z1) = lo, hi
+        dx, dy, dz = (x1 - x0, 0, 0), (0, y1 - y0, 0), (0, 0, z1 - z0)
+        faces = {
+            "-x": ((x0, y0, z0), dz, dy), "+x": ((x1, y0, z0), dy, dz),
+            "-y": ((x0, y0, z0), dx, dz), "+y": ((x0, y1, z0), dz, dx),
+            "-z": ((x0, y0, z0), dy, dx), "+z": ((x0, y0, z1), dx, dy),
+        }
+        for k, (o, u, v) in faces.items():
+            if k not in omit:
+                self.rect(obj, mat, o, u, v, uv_of=None)
+
+    def oriented_box(self, obj, mat, centre, size, angle_deg, omit_bottom=True, uv=False):
+        """A box of `size` (x, y, z) standing on y = centre[1], rotated by angle about +y; faces
+        outwards; with `uv`, each face maps the whole texture (v up on the sides)."""
+        c, s = math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
+        hx, hz = size[0] / 2, size[2] / 2
+
+        def P(x, y, z):
+            return (centre[0] + c * x + s * z, centre[1] + y, centre[2] - s * x + c * z)
+
+        H = size[1]
+        ring = [P(-hx, 0, -hz), P(hx, 0, -hz), P(hx, 0, hz), P(-hx, 0, hz)]  # counter-clockwise from below
+        top = [(p[0], p[1] + H, p[2]) for p in ring]
+        quad_uv = [(0, 0), (1, 0), (1, 1), (0, 1)]
+        for i in range(4):
+            a, b = ring[i], ring[(i + 1) % 4]
+            pts = [b, a, top[i], top[(i + 1) % 4]]  # seen from outside: CCW
+            mid = ((a[0] + b[0]) / 2 - centre[0], 0, (a[2] + b[2]) / 2 - centre[2])
+            self.face(obj, mat, pts, quad_uv if uv else None, expect_normal=mid)
+        self.face(obj, mat, [top[0], top[3], top[2], top[1]], quad_uv if uv else None, expect_normal=(0, 1, 0))
+        if not omit_bottom:
+            self.face(obj, mat, ring, quad_uv if uv else None, expect_normal=(0, -1, 0))
+
+    def triangle_count(self):
+        return sum(len(p) - 2 for _, fs in self.objects.values() for p, _ in fs)
+
+    def write(self, folder, header):
+        os.makedirs(folder, exist_ok=True)
+        vid, vlist, tid, tlist = {}, [], {}, []
+
+        def vi(p):
+            k = tuple(round(c, 6) for c in p)
+            if k not in vid:
+                vid[k] = len(vlist) + 1
+                vlist.append(k)
+            return vid[k]
+
+        def ti(t):
+            k = (round(t[0], 6), round(t[1], 6))
+            if k not in tid:
+                tid[k] = len(tlist) + 1
+                tlist.append(k)
+            return tid[k]
+
+        body = []
+        for name in self.order:
+            mat, faces = self.objects[name]
+            body.append("\no %s\ng %s\nusemtl %s" % (name, name, mat))
+            for pts, uvs in faces:
+                if uvs:
+                    body.append("f " + " ".join("%d/%d" % (vi(p), ti(t)) for p, t in zip(pts, uvs)))
+                else:
+                    body.append("f " + " ".join(str(vi(p)) for p in pts))
+        with open(os.path.join(folder, "scene.obj"), "w") as f:
+            f.write("# %s\n# generated by scenes/rooms/generate.py (do not edit by hand); metres, CCW fronts\n"
+                    % header)
+            f.write("mtllib scene.mtl\n")
+            for p in vlist:
+                f.write("v %.6f %.6f %.6f\n" % p)
+            for t in tlist:
+                f.write("vt %.6f %.6f\n" % t)
+            f.write("\n".join(body) + "\n")
+        with open(os.path.join(folder, "scene.mtl"), "w") as f:
+            f.write("# Kd diffuse reflectance (linear RGB), Ke emitted radiance; map_Kd is multiplied by Kd,\n"
+                    "# 8-bit textures are sRGB-encoded. generated by scenes/rooms/generate.py\n")
+            for name, m in self.materials.items():
+                f.write("\nnewmtl %s\n" % name)
+                kd = m.get("Kd", (0, 0, 0))
+                f.write("Kd %g %g %g\n" % tuple(kd))
+                f.write("Ks 0 0 0\n")
+                f.write("Ke %g %g %g\n" % tuple(m.get("Ke", (0, 0, 0))))
+                if "map_Kd" in m:
+                    f.write("map_Kd %s\n" % m["map_Kd"])
+                f.write("Ni 1\nd 1\nillum 1\n")
+                assert max(kd) <= 0.8 or "map_Kd" in m, name
+
+
+def shell(model, xs, zs, column, mat_floor, mat_ceil, mat_wall, uv_of=None):
+    """Room shell from a floor plan. column(i, j) -> None (solid) or (y0, y1) of cell
+    [xs[i], xs[i+1]] x [zs[j], zs[j+1]]. mat_floor/mat_ceil(i, j) -> material; mat_wall(i, j, side, y0, y1)
+    -> list of (y0, y1, material) bands for the wall of cell (i, j) on `side` ('-x', '+x', '-z', '+z', the
+    side of the cell it stands on) over [y0, y1]. uv_of(material, point) -> (u, v) or None."""
+    nx, nz = len(xs) - 1, len(zs) - 1
+
+    def col(i, j):
+        return column(i, j) if 0 <= i < nx and 0 <= j < nz else None
+
+    def uvf(mat):
+        if uv_of is None:
+            return None
+        return (lambda p: uv_of(mat, p)) if uv_of(mat, (0, 0, 0)) is not None else None
+
+    for i in range(nx):
+        for j in range(nz):
+            c = col(i, j)
+            if c is None:
+                continue
+            y0, y1 = c
+            x0, x1, z0, z1 = xs[i], xs[i + 1], zs[j], zs[j + 1]
+            m = mat_floor(i, j)
+            model.rect("floor", m, (x0, y0, z0), (0, 0, z1 - z0), (x1 - x0, 0, 0), uvf(m))
+            m = mat_ceil(i, j)
+            model.rect("ceiling", m, (x0, y1, z0), (x1 - x0, 0, 0), (0, 0, z1 - z0), uvf(m))
+            for side, nb in (("-x", col(i - 1, j)), ("+x", col(i + 1, j)), ("-z", col(i, j - 1)), ("+z", col(i, j + 1))):
+                # the parts of [y0, y1] that the neighbour column does not cover
+                gaps = [(y0, y1)] if nb is None else [(y0, min(y1, nb[0])), (max(y0, nb[1]), y1)]
+                for g0, g1 in gaps:
+                    if g1 - g0 <= 1e-9:
+                        continue
+                    for b0, b1, m in mat_wall(i, j, side, g0, g1):
+                        h = (0, b1 - b0, 0)
+                        if side == "-x":  # wall at x0, faces +x
+                            model.rect("walls", m, (x0, b0, z0), h, (0, 0, z1 - z0), uvf(m))
+                        elif side == "+x":  # wall at x1, faces -x
+                            model.rect("walls", m, (x1, b0, z0), (0, 0, z1 - z0), h, uvf(m))
+                        elif side == "-z":  # wall at z0, faces +z
+                            model.rect("walls", m, (x0, b0, z0), (x1 - x0, 0, 0), h, uvf(m))
+                        else:  # wall at z1, faces -z
+                            model.rect("walls", m, (x0, b0, z1), h, (x1 - x0, 0, 0), uvf(m))
+
+
+def table(model, x0, x1, z0, z1, height, mat, top=0.04, leg=0.05, inset=0.04):
+    """A table: a top slab (all six faces) on four legs standing on the floor (no bottom/top faces)."""
+    model.box("table_top", mat, (x0, height - top, z0), (x1, height, z1))
+    for lx in (x0 + inset, x1 - inset - leg):
+        for lz in (z0 + inset, z1 - inset - leg):
+            model.box("table_legs", mat, (lx, 0.0, lz), (lx + leg, height - top, lz + leg), omit=("-y", "+y"))
+
+
+def chair(model, x0, z0, size, seat_h, back_h, mat, back_side):
+    """A chair standing on the floor: seat slab, four legs, and a back slab rising from the seat on the
+    `back_side` ('-z' or '+z') edge."""
+    leg, t = 0.04, 0.04
+    x1, z1 = x0 + size, z0 + size
+    model.box("chairs", mat, (x0, seat_h - t, z0), (x1, seat_h, z1))
+    for lx in (x0, x1 - leg):
+        for lz in (z0, z1 - leg):
+            model.box("chairs", mat, (lx, 0.0, lz), (lx + leg, seat_h - t, lz + leg), omit=("-y", "+y"))
+    bz = (z0, z0 + t) if back_side == "-z" else (z1 - t, z1)
+    model.box("chairs", mat, (x0, seat_h, bz[0]), (x1, back_h, bz[1]), omit=("-y",))
+
+
+def rolled_up(eye, look_at, roll_deg):
+    """The camera up vector: world +y made orthogonal to the view and rotated by roll_deg about it."""
+    f = normalize(sub(look_at, eye))
+    r = normalize(cross(f, (0, 1, 0)))
+    u = cross(r, f)
+    c, s = math.cos(math.radians(roll_deg)), math.sin(math.radians(roll_deg))
+    return tuple(round(c * u[k] + s * r[k], 6) for k in range(3))
+
+
+def write_toml(name, title, cam, extra=""):
+    with open(os.path.join(HERE, name + ".toml"), "w") as f:
+        f.write("# %s\n" % title)
+        f.write("# Geometry: scenes/rooms/%s/, generated by scenes/rooms/generate.py. Reference:\n"
+                "# references/%s/reference.exr (Mitsuba 3, path tracer). Radiosity settings are left to the\n"
+                "# quality preset on purpose: these rooms measure radray as a user would run it.\n" % (name, name))
+        f.write("[camera]\neye = [%s]\nlook_at = [%s]\nup = [%s]\nvfov_deg = %s\n\n" % (
+            ", ".join(repr(float(c)) for c in cam["eye"]), ", ".join(repr(float(c)) for c in cam["look_at"]),
+            ", ".join(repr(float(c)) for c in cam["up"]), repr(float(cam["vfov_deg"]))))
+        f.write("[image]\nwidth = 256\nheight = 256\nsamples_per_pixel = 16\n\n")
+        f.write(extra)
+        f.write("[[mesh]]\nobj = \"%s/scene.obj\"\n" % name)
+
+
+# -------------------------------------------------------------------------------------------- rooms
+WALL = (0.72, 0.70, 0.66)
+CEIL = (0.78, 0.78, 0.76)
+
+
+def l_room():
+    m = Model()
+    m.material("wall", Kd=WALL)
+    m.material("ceiling", Kd=CEIL)
+    m.material("floor", Kd=(0.45, 0.32, 0.20))
+    m.material("wood", Kd=(0.50, 0.33, 0.18))
+    m.material("cabinet", Kd=(0.25, 0.38, 0.60))
+    m.material("lamp", Kd=(0, 0, 0), Ke=(24.0, 21.6, 18.0))
+    xs = [0.0, 1.5, 3.0, 4.5, 6.0]
+    zs = [0.0, 1.0, 2.0, 3.0, 4.5, 6.0]
+    H = 2.7
+
+    def column(i, j):
+        return (0.0, H) if zs[j] < 3.0 or xs[i] < 3.0 else None
+
+    def walls(i, j, side, y0, y1):
+        if side == "-x" and i == 0 and j == 1:  # the wall lamp: x = 0, z in [1, 2], y in [1.3, 1.9]
+            return [(y0, 1.3, "wall"), (1.3, 1.9, "lamp"), (1.9, y1, "wall")]
+        return [(y0, y1, "wall")]
+
+    shell(m, xs, zs, column, lambda i, j: "floor", lambda i, j: "ceiling", walls)
+    table(m, 0.35, 1.55, 3.9, 4.7, 0.75, "wood")
+    chair(m, 0.7, 4.8, 0.44, 0.45, 0.92, "wood", "+z")
+    chair(m, 0.75, 3.4, 0.44, 0.45, 0.92, "wood", "-z")
+    # a tall cabinet with its back against the end wall z = 6 of the second arm
+    m.box("cabinet", "cabinet", (1.9, 0.0, 5.45), (2.9, 1.9, 6.0), omit=("-y", "+z"))
+    # a low sideboard against the wall z = 0, under nothing, touching the corner x = 6
+    m.box("sideboard", "wood", (4.4, 0.0, 0.0), (6.0, 0.8, 0.45), omit=("-y", "-z", "+x"))
+    m.write(os.path.join(HERE, "l_room"), "l_room: L-shaped room, wall lamp, table, chairs, cabinet, sideboard")
+    eye, look = (5.7, 1.6, 0.3), (0.5, 0.8, 4.5)
+    cam = {"eye": eye, "look_at": look, "up": rolled_up(eye, look, 7.0), "vfov_deg": 65.0}
+    write_toml("l_room", "L-shaped room (6 x 6 m plan, 2.7 m high) lit by a lamp on a wall; a table with two "
+               "chairs and a cabinet near the walls;\n# the camera is rolled by 7 degrees.", cam)
+    return m, cam
+
+
+def gap_room():
+    m = Model()
+    m.material("wall", Kd=WALL)
+    m.material("ceiling", Kd=CEIL)
+    m.material("floor", Kd=(0.50, 0.48, 0.45))
+    m.material("wood", Kd=(0.50, 0.33, 0.18))
+    m.material("cabinet", Kd=(0.55, 0.25, 0.20))
+    m.material("lamp", Kd=(0, 0, 0), Ke=(250.0, 250.0, 250.0))
+    xs = [0.0, 1.0, 2.0, 2.8, 3.3, 4.0]
+    zs = [0.0, 2.0, 4.0, 4.2, 6.0, 7.0, 8.0]
+    H = 2.6
+
+    def column(i, j):
+        if j == 2:  # the dividing wall, 0.2 m thick; the door gap is x in [2.8, 3.3], 2.0 m high
+            return (0.0, 2.0) if i == 3 else None
+        return (0.0, H)
+
+    shell(m, xs, zs, column, lambda i, j: "floor",
+          lambda i, j: "lamp" if (i, j) == (1, 4) else "ceiling",
+          lambda i, j, side, y0, y1: [(y0, y1, "wall")])
+    m.box("cabinet", "cabinet", (0.0, 0.0, 2.4), (0.5, 1.2, 3.4), omit=("-y", "-x"))  # dark room, on wall x=0
+    m.box("crate", "wood", (3.0, 0.0, 5.0), (3.8, 0.6, 5.8), omit=("-y",))  # lit room, near the door
+    table(m, 1.2, 2.2, 0.0 + 0.6, 1.3, 0.72, "wood")  # dark room
+    m.write(os.path.join(HERE, "gap_room"), "gap_room: a dark room lit through a 0.5 m door gap")
+    eye, look = (0.5, 1.5, 0.3), (2.9, 1.0, 4.2)
+    cam = {"eye": eye, "look_at": look, "up": (0.0, 1.0, 0.0), "vfov_deg": 60.0}
+    write_toml("gap_room", "Two rooms joined by a 0.5 m x 2 m door gap; the only light is a ceiling panel in "
+               "the far room and\n# the camera stands in the dark room: every light path it sees passes "
+               "the gap.", cam)
+    return m, cam
+
+
+def alcove_hall():
+    m = Model()
+    m.material("wall", Kd=WALL)
+    m.material("ceiling", Kd=CEIL)
+    m.material("floor", Kd=(0.48, 0.45, 0.40))
+    m.material("red", Kd=(0.63, 0.12, 0.08))
+    m.material("green", Kd=(0.15, 0.45, 0.12))
+    m.material("blue", Kd=(0.15, 0.20, 0.55))
+    m.material("yellow", Kd=(0.70, 0.60, 0.15))
+    m.material("lamp", Kd=(0, 0, 0), Ke=(16.0, 16.0, 14.5))
+    xs = [-0.4, 0.0, 1.0, 1.8, 2.2, 2.5, 3.5, 3.8, 4.2, 5.0, 6.0]
+    zs = [0.0, 1.2, 2.0, 2.4, 3.0, 3.3, 5.0, 5.7]
+    H = 3.0
+
+    def column(i, j):
+        x0, z0 = xs[i], zs[j]
+        if x0 < 0:  # the niche in the left wall: 0.4 m deep, z in [2, 3], sill at 0.9 m, top at 1.9 m
+            return (0.9, 1.9) if 2.0 <= z0 < 3.0 else None
+        if z0 >= 5.0:  # the two alcoves in the back wall: 0.7 m deep, 2.3 m high
+            return (0.0, 2.3) if (1.0 <= x0 < 2.2) or (3.8 <= x0 < 5.0) else None
+        if z0 == 2.0 and (x0 == 1.8 or x0 == 3.8):  # two pillars, 0.4 x 0.4 m
+            return None
+        if z0 == 3.0:  # the ceiling beam, 0.3 m wide, 0.4 m deep
+            return (0.0, H - 0.4)
+        return (0.0, H)
+
+    def walls(i, j, side, y0, y1):
+        x0, z0 = xs[i], zs[j]
+        if x0 < 0:
+            return [(y0, y1, "yellow")]
+        if z0 >= 5.0 and side == "+z":
+            return [(y0, y1, "blue")]
+        if side == "-x" and i == 1:
+            return [(y0, y1, "red")]
+        if side == "+x" and i == len(xs) - 2:
+            return [(y0, y1, "green")]
+        return [(y0, y1, "wall")]
+
+    shell(m, xs, zs, column, lambda i, j: "floor",
+          lambda i, j: "lamp" if (xs[i], zs[j]) == (2.5, 1.2) else "ceiling", walls)
+    # a bench against the right (green) wall, near the front
+    m.box("bench", "wall", (5.5, 0.0, 0.6), (6.0, 0.45, 2.0), omit=("-y", "+x"))
+    m.write(os.path.join(HERE, "alcove_hall"), "alcove_hall: alcoves, niche, pillars, beam, coloured walls")
+    eye, look = (5.6, 1.7, 0.3), (1.0, 1.0, 4.5)
+    cam = {"eye": eye, "look_at": look, "up": (0.0, 1.0, 0.0), "vfov_deg": 68.0}
+    write_toml("alcove_hall", "A 6 x 5 m hall, 3 m high, with concave corners everywhere: two alcoves, a niche "
+               "with a sill, two\n# pillars, a low ceiling beam; a ceiling light; red, green, blue and "
+               "yellow walls for colour bleeding.", cam)
+    return m, cam
+
+
+# ----------------------------------------------------------------------------------------- textures
+def srgb_encode(lin):
+    lin = np.clip(lin, 0.0, 1.0)
+    return np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1 / 2.4) - 0.055)
+
+
+def to8(lin):
+    """Linear RGB in [0, 0.8] -> sRGB-encoded 8-bit (the cap keeps every texel albedo <= 0.8)."""
+    return np.round(srgb_encode(np.clip(lin, 0.0, 0.8)) * 255.0).astype(np.uint8)
+
+
+def smooth_noise(rng, n, octaves=5):
+    """Deterministic value noise on an n x n grid in [0, 1], periodic, sum of octaves."""
+    out = np.zeros((n, n))
+    amp, tot = 1.0, 0.0
+    for o in range(octaves):
+        k = 4 * 2 ** o
+        g = rng.random((k, k))
+        t = np.arange(n) * k / n
+        i0 = np.floor(t).astype(int)
+        f = t - i0
+        f = f * f * (3 - 2 * f)
+        i1 = (i0 + 1) % k
+        rows = g[i0][:, i0] * (1 - f)[None, :] + g[i0][:, i1] * f[None, :]
+        rows1 = g[i1][:, i0] * (1 - f)[None, :] + g[i1][:, i1] * f[None, :]
+        out += amp * (rows * (1 - f)[:, None] + rows1 * f[:, None])
+        tot += amp
+        amp *= 0.5
+    return out / tot
+
+
+def photo_texture(n=256):
+    """A photo-like landscape (linear RGB): sky gradient, sun, clouds, two mountain ridges, a lake with
+    the sky's reflection, a meadow and a tree. Row 0 is the top of the picture."""
+    rng = np.random.default_rng(20261201)
+    y, x = np.mgrid[0:n, 0:n] / (n - 1.0)
+    img = np.zeros((n, n, 3))
+    sky = np.stack([0.20 + 0.45 * y, 0.35 + 0.40 * y, 0.75 + 0.05 * y], axis=-1)
+    clouds = np.clip(smooth_noise(rng, n) * 1.8 - 0.9, 0, 1)[..., None]
+    sky = sky * (1 - 0.8 * clouds) + 0.78 * clouds
+    sun = np.exp(-((x - 0.72) ** 2 + (y - 0.2) ** 2) / 0.002)[..., None]
+    sky = sky + sun * np.array([0.6, 0.5, 0.2])
+    img[:] = sky
+    ridge_n = smooth_noise(rng, n)[0]
+    ridge1 = 0.42 + 0.10 * np.sin(x[0] * 7.0 + 1.0) + 0.06 * (ridge_n - 0.5)
+    ridge2 = 0.52 + 0.05 * np.sin(x[0] * 13.0) + 0.05 * (smooth_noise(rng, n)[3] - 0.5)
+    rock = smooth_noise(rng, n)
+    far = y > ridge1[None, :]
+    img[far] = (np.array([0.30, 0.32, 0.42]) * (0.8 + 0.4 * rock[..., None]))[far]
+    snow = far & (y < ridge1[None, :] + 0.03)
+    img[snow] = np.array([0.78, 0.78, 0.80])
+    near = y > ridge2[None, :]
+    img[near] = (np.array([0.12, 0.22, 0.10]) * (0.7 + 0.6 * rock[..., None]))[near]
+    lake = (y > 0.62) & (y < 0.74)
+    refl = img[np.clip((2 * 0.62 * (n - 1) - np.arange(n) * 1.0).astype(int), 0, n - 1)][:, :]
+    img[lake] = (0.55 * refl + np.array([0.02, 0.06, 0.10]))[lake]
+    grass = smooth_noise(rng, n, 6)
+    meadow = y >= 0.74
+    img[meadow] = (np.array([0.18, 0.40, 0.08]) * (0.6 + 0.8 * grass[..., None]))[meadow]
+    trunk = (np.abs(x - 0.22) < 0.012) & (y > 0.55) & (y < 0.82)
+    img[trunk] = np.array([0.20, 0.12, 0.06])
+    crown = ((x - 0.22) ** 2 / 0.006 + (y - 0.52) ** 2 / 0.012) < 1
+    img[crown] = (np.array([0.06, 0.20, 0.05]) * (0.6 + 0.8 * grass[..., None]))[crown]
+    return img
+
+
+def checker_texture(n=256, squares=8):
+    y, x = np.mgrid[0:n, 0:n] * squares // n
+    light = ((x + y) % 2 == 0)[..., None]
+    return np.where(light, np.array([0.75, 0.72, 0.66]), np.array([0.05, 0.05, 0.06]))
+
+
+def wood_texture(n=256):
+    rng = np.random.default_rng(7)
+    y, x = np.mgrid[0:n, 0:n] / float(n)
+    wobble = smooth_noise(rng, n, 4)
+    rings = 0.5 + 0.5 * np.sin(2 * np.pi * (x * 9.0 + 1.5 * wobble + 0.3 * y))
+    return np.array([0.45, 0.26, 0.11])[None, None, :] * (0.55 + 0.45 * rings[..., None])
+
+
+def textured_box():
+    m = Model()
+    folder = os.path.join(HERE, "textured_box")
+    tex = os.path.join(folder, "textures")
+    os.makedirs(tex, exist_ok=True)
+    Image.fromarray(to8(photo_texture())).save(os.path.join(tex, "photo.png"), optimize=False)
+    Image.fromarray(to8(checker_texture())).save(os.path.join(tex, "checker.png"), optimize=False)
+    Image.fromarray(to8(wood_texture())).save(os.path.join(tex, "wood.jpg"), quality=92, subsampling=0)
+    m.material("white", Kd=(0.73, 0.71, 0.68))
+    m.material("red", Kd=(0.63, 0.065, 0.05))
+    m.material("green", Kd=(0.14, 0.45, 0.091))
+    m.material("photo", Kd=(1, 1, 1), map_Kd="textures/photo.png")  # as exporters write it
+    m.material("checker", Kd=(0.8, 0.8, 0.8), map_Kd="textures/checker.png")
+    m.material("wood", Kd=(0.7, 0.7, 0.7), map_Kd="textures/wood.jpg")
+    m.material("lamp", Kd=(0, 0, 0), Ke=(18.0, 15.0, 10.5))
+    S = 2.0
+    xs = [0.0, 0.75, 1.25, 2.0]
+    zs = [0.0, 0.75, 1.25, 2.0]
+
+    def walls(i, j, side, y0, y1):
+        if side == "-z":
+            return []  # open front, as in the Cornell box
+        if side == "+z":
+            return [(y0, y1, "photo")]
+        return [(y0, y1, "green" if side == "-x" else "red")]  # image-right is -x: red on the left
+
+    def uv_of(mat, p):
+        if mat == "photo":  # back wall z = 2, seen from -z: image-right is -x
+            return ((S - p[0]) / S, p[1] / S)
+        if mat == "checker":  # floor: u along -x, v along +z (far side at the top of the image)
+            return ((S - p[0]) / S, p[2] / S)
+        return None
+
+    shell(m, xs, zs, lambda i, j: (0.0, S), lambda i, j: "checker",
+          lambda i, j: "lamp" if (i, j) == (1, 1) else "white", walls, uv_of)
+    m.oriented_box("short_block", "white", (0.65, 0.0, 0.70), (0.6, 0.6, 0.6), -17.0)
+    m.oriented_box("tall_block", "wood", (1.32, 0.0, 1.30), (0.6, 1.2, 0.6), 17.0, uv=True)
+    m.write(folder, "textured_box: Cornell-like box with a photo back wall, checker floor, wood block")
+    cam = {"eye": (1.0, 1.0, -2.9), "look_at": (1.0, 1.0, 0.0), "up": (0.0, 1.0, 0.0), "vfov_deg": 39.3}
+    write_toml("textured_box", "A Cornell-like 2 m box, open at the front, with textures made by "
+               "generate.py: a photo-like\n# picture on the back wall (Kd 1 x map_Kd), a checker floor "
+               "(Kd 0.8 x map_Kd) and a wood JPEG on the tall block.", cam)
+    return m, cam
+
+
+if __name__ == "__main__":
+    for make in (l_room, gap_room, alcove_hall, textured_box):
+        model, _ = make()
+        print("%-12s %4d triangles, %d materials" % (make.__name__, model.triangle_count(), len(model.materials)))
