@@ -11,6 +11,7 @@ pub mod compare;
 pub mod diagnose;
 pub mod film;
 pub mod info;
+pub mod material;
 pub mod mesh;
 pub mod output;
 pub mod pipeline;
