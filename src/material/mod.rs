@@ -65,6 +65,8 @@ pub struct AlbedoClamp {
     pub quantity: &'static str,
     /// Its value before clamping, per channel.
     pub value: Vec3,
+    /// The ceiling it was clamped to (`ALBEDO_CEILING`, or 1 for a mirror's Ks alone).
+    pub ceiling: f32,
 }
 
 impl std::fmt::Display for AlbedoClamp {
@@ -72,8 +74,8 @@ impl std::fmt::Display for AlbedoClamp {
         let [r, g, b] = self.value.to_array();
         write!(
             f,
-            "material `{}`: {} = [{r}, {g}, {b}] reaches 1 or more; clamped to {ALBEDO_CEILING} (radray's albedo ceiling)",
-            self.material, self.quantity
+            "material `{}`: {} = [{r}, {g}, {b}] reaches 1 or more; clamped to {} (radray's albedo ceiling)",
+            self.material, self.quantity, self.ceiling
         )
     }
 }
@@ -88,22 +90,36 @@ pub fn clamp_albedo(m: &mut Material) -> Option<AlbedoClamp> {
         return None;
     }
     m.diffuse_reflectance = ceiling(kd);
-    m.textures.diffuse.is_none().then(|| AlbedoClamp { material: m.name.clone(), quantity: "Kd", value: kd })
+    m.textures.diffuse.is_none().then(|| AlbedoClamp {
+        material: m.name.clone(),
+        quantity: "Kd",
+        value: kd,
+        ceiling: ALBEDO_CEILING,
+    })
 }
 
 /// Clamps a material whose total reflectance exceeds 1 — Kd + Ks, or Kd + max(Ks, 1 − d) for a
 /// dielectric (the rule of `scene::check_material`) — by scaling its specular part (Ks, and the
 /// transmittance of a dielectric) by s so that the largest channel of the total is `ALBEDO_CEILING`:
 /// s = minₖ (ρ_max − Kdₖ) / specₖ over the channels that exceed 1. Kd (the colour pass one sees) is
-/// kept. Used for MTL files, whose `illum 2` Ks is often a highlight strength that was never meant to
-/// add up with Kd; TOML materials are radray's own and stay errors.
+/// kept. A Ks above 1 on its own is first lowered to 1 (a perfect mirror). Used for MTL files, whose
+/// `illum 2` Ks is often a highlight strength that was never meant to add up with Kd; TOML materials
+/// are radray's own and stay errors.
 pub fn clamp_energy(m: &mut Material) -> Option<AlbedoClamp> {
+    let ks = m.specular_reflectance;
+    if !(ks.is_finite() && m.diffuse_reflectance.is_finite() && m.transmittance.is_finite()) {
+        return None;
+    }
+    let ks_clamp = (ks.max_element() > 1.0).then(|| {
+        m.specular_reflectance = ks.min(Vec3::ONE);
+        AlbedoClamp { material: m.name.clone(), quantity: "Ks", value: ks, ceiling: 1.0 }
+    });
     let dielectric = m.is_dielectric();
     let t = Vec3::splat(if dielectric { m.transmittance } else { 0.0 });
     let specular = m.specular_reflectance.max(t);
     let total = m.diffuse_reflectance + specular;
-    if !total.is_finite() || total.max_element() <= 1.0 + 1e-6 {
-        return None;
+    if total.max_element() <= 1.0 + 1e-6 {
+        return ks_clamp;
     }
     let mut s = 1.0f32;
     for k in 0..3 {
@@ -116,7 +132,7 @@ pub fn clamp_energy(m: &mut Material) -> Option<AlbedoClamp> {
         m.transmittance *= s;
     }
     let quantity = if dielectric { "Kd + max(Ks, 1 - d)" } else { "Kd + Ks" };
-    Some(AlbedoClamp { material: m.name.clone(), quantity, value: total })
+    Some(AlbedoClamp { material: m.name.clone(), quantity, value: total, ceiling: ALBEDO_CEILING })
 }
 
 #[cfg(test)]

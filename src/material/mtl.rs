@@ -1,5 +1,6 @@
 //! MTL files as exporters write them → `scene::Material`s. Reads `Kd Ks Ke Tf Ns Ni d Tr illum` and
-//! `map_Kd map_d map_Ke`; everything else is skipped with one warning per file. Numbers that cannot
+//! `map_Kd map_d map_Ke`; everything else is skipped with one warning per file (`Ka 0 0 0`, which asks
+//! for nothing, silently). Numbers that cannot
 //! be right (negative, non-finite, `d` outside [0, 1]) are errors with file:line.
 //!
 //! What the statements mean in radray (also the README's "MTL statements" table):
@@ -104,6 +105,10 @@ pub fn parse(path: &Path, text: &str) -> Result<MtlLibrary, MtlError> {
             lower.as_str(),
             "kd" | "ks" | "ke" | "tf" | "ns" | "ni" | "d" | "tr" | "illum" | "map_kd" | "map_d" | "map_ke"
         );
+        // An ambient colour of 0 asks for nothing radray lacks (the shipped MTLs write `Ka 0 0 0`).
+        if lower == "ka" && matches!(colour(keyword, rest), Ok(Some(c)) if c == Vec3::ZERO) {
+            continue;
+        }
         let Some(m) = current.as_mut().filter(|_| known) else {
             let what = if known { format!("{keyword} (before any newmtl)") } else { keyword.to_string() };
             note(&mut ignored, &what);
@@ -300,7 +305,7 @@ fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlErro
     let filter_of = |c: Vec3| {
         let amount = c.max_element();
         if amount > 0.0 {
-            (amount, c / amount)
+            (amount.min(1.0), c / amount)
         } else {
             (0.0, Vec3::ONE)
         }
