@@ -71,7 +71,12 @@ pub struct AlbedoClamp {
 
 impl std::fmt::Display for AlbedoClamp {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let [r, g, b] = self.value.to_array();
+        // Four decimals: sums such as 0.486 + 0.9 print as 1.386, not 1.3859999.
+        let short = |x: f32| {
+            let text = format!("{x:.4}");
+            text.trim_end_matches('0').trim_end_matches('.').to_string()
+        };
+        let [r, g, b] = self.value.to_array().map(short);
         write!(
             f,
             "material `{}`: {} = [{r}, {g}, {b}] reaches 1 or more; clamped to {} (radray's albedo ceiling)",
