@@ -381,7 +381,7 @@ mod tests {
 
     /// n×n texels, 1 where i + j is even, 0 elsewhere.
     fn checker(n: u32) -> Texture {
-        let texels = (0..n * n).map(|k| grey(((k % n + k / n) % 2 == 0) as u32 as f32)).collect();
+        let texels = (0..n * n).map(|k| grey((k % n + k / n).is_multiple_of(2) as u32 as f32)).collect();
         Texture::from_linear(n, n, texels, false)
     }
 
