@@ -10,6 +10,7 @@ pub mod cli;
 pub mod compare;
 pub mod film;
 pub mod info;
+pub mod material;
 pub mod mesh;
 pub mod output;
 pub mod progress;

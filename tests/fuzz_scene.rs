@@ -455,3 +455,89 @@ proptest! {
         check_obj(&obj, "scale = 0.001\n");
     }
 }
+
+// ---------------------------------------------------------------------------------------------------
+// (d) Random MTL files as exporters write them: illum models, Tr, Tf, texture maps with options,
+// unknown statements, Windows line endings and tabs. The random statements apply to `white`, the
+// material of the cube's walls, so every case reaches the scene's material checks.
+
+fn mtl_number() -> impl Strategy<Value = String> {
+    prop_oneof![
+        12 => (0.0f64..1.0).prop_map(|x| format!("{x:.3}")),
+        4 => prop::sample::select(&["0", "1", "1.0000", "0.98", "1.2", "2.5"][..]).prop_map(str::to_string),
+        1 => prop::sample::select(&["-0.1", "nan", "inf", "x", "", "1e40", "-0"][..]).prop_map(str::to_string),
+    ]
+}
+
+fn mtl_line() -> impl Strategy<Value = String> {
+    let colour = prop_oneof![
+        4 => (mtl_number(), mtl_number(), mtl_number()).prop_map(|(r, g, b)| format!("{r} {g} {b}")),
+        1 => mtl_number(),
+        1 => Just("spectral ident.rfl 1".to_string()),
+    ];
+    let file = prop::sample::select(&["wood.png", "missing.jpg", "textures/bricks a.tga", "..\\up.png", ""][..]);
+    let options = prop::sample::select(
+        &["", "-bm 1 ", "-s 2 2 1 ", "-o 0.5 ", "-clamp on ", "-imfchan m ", "-mm 0 1 ", "-x "][..],
+    );
+    prop_oneof![
+        3 => (prop::sample::select(&["Kd", "Ks", "Ke", "Tf", "Ka", "kd"][..]), colour)
+            .prop_map(|(k, c)| format!("{k} {c}")),
+        3 => (prop::sample::select(&["Ns", "Ni", "d", "Tr", "d -halo"][..]), mtl_number())
+            .prop_map(|(k, x)| format!("{k} {x}")),
+        3 => prop::sample::select(&["0", "1", "2", "3", "4", "5", "6", "7", "8", "9", "10", "11", "-1", "x", ""][..])
+            .prop_map(|n| format!("illum {n}")),
+        3 => (prop::sample::select(&["map_Kd", "map_d", "map_Ke", "map_bump", "bump", "map_Ks"][..]), options, file)
+            .prop_map(|(k, o, f)| format!("{k} {o}{f}")),
+        1 => prop::sample::select(&["Pr 0.5", "Pm 1", "norm n.png", "refl -type sphere s.png", "# c", "", "newmtl"][..])
+            .prop_map(str::to_string),
+    ]
+}
+
+/// `white` with random statements, `lamp` as the emitter; CRLF, tabs or plain.
+fn mtl_text() -> impl Strategy<Value = String> {
+    (prop::collection::vec(mtl_line(), 0..12), 0..3u8).prop_map(|(lines, style)| {
+        let mut text = String::from("newmtl lamp\nKd 0 0 0\nKe 4 4 4\n\nnewmtl white\nKd 0.5 0.5 0.5\n");
+        for l in lines {
+            text.push_str(if style == 1 { "\t" } else { "" });
+            text.push_str(&l);
+            text.push('\n');
+        }
+        if style == 2 {
+            text = text.replace('\n', "\r\n");
+        }
+        text
+    })
+}
+
+/// The cube of (c), with its walls textured so that map statements meet `vt`.
+const TEXTURED_CUBE: &str = "mtllib m.mtl\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nusemtl white\nf 1/1 4/2 3/3 2/4\nf 5/1 6/2 7/3 8/4\nf 1/1 2/2 6/3 5/4\n\
+f 4/1 8/2 7/3 3/4\nf 1/1 5/2 8/3 4/4\nusemtl lamp\nf 2 3 7 6\n";
+
+proptest! {
+    #![proptest_config(config(64))]
+
+    /// Whatever the MTL says, the scene loads with materials `check_material` accepts (reflectances
+    /// of 1 or more were clamped, not refused) or fails with the MTL file and line.
+    #[test]
+    fn random_mtl_statements_never_panic(mtl in mtl_text()) {
+        let dir = tempfile::tempdir().expect("temp dir");
+        std::fs::write(dir.path().join("m.obj"), TEXTURED_CUBE).expect("write OBJ");
+        std::fs::write(dir.path().join("m.mtl"), &mtl).expect("write MTL");
+        let path = dir.path().join("scene.toml");
+        std::fs::write(&path, "[[mesh]]\nobj = \"m.obj\"\n").expect("write scene");
+        match scene::load(&path) {
+            Ok(s) => {
+                for m in &s.materials {
+                    prop_assert!(scene::check_material(m).is_ok(), "{m:?}");
+                    prop_assert!(m.transmission_filter.is_finite() && m.transmission_filter.max_element() <= 1.0);
+                }
+                assert_meshes_cleanly(&s);
+            }
+            Err(e) => {
+                let message = e.to_string();
+                prop_assert!(message.contains("m.mtl:") || message.contains("m.obj"), "{message}");
+            }
+        }
+    }
+}

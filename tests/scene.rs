@@ -106,12 +106,17 @@ fn non_finite_numbers_are_refused() {
 }
 
 #[test]
-fn reflectance_outside_unit_interval_is_refused() {
+fn kd_of_one_or_more_is_clamped_with_one_warning_and_negative_kd_is_refused() {
     let toml = format!("{CAMERA}{LIGHT_AND_QUAD}\n[[material]]\nname = \"bad\"\nkd = [1.0, 0.5, 0.5]\n");
-    let msg = error_of(&toml);
-    assert!(msg.contains("scene.toml:17:") && msg.contains("Kd"), "{msg}");
+    let (_d, r) = parse_files(&[("scene.toml", &toml)]);
+    let s = r.unwrap();
+    let m = s.materials.iter().find(|m| m.name == "bad").unwrap();
+    assert_eq!(m.diffuse_reflectance.x, radray::material::ALBEDO_CEILING);
+    let clamped: Vec<&String> = s.warnings.iter().filter(|w| w.contains("clamped")).collect();
+    assert_eq!(clamped.len(), 1, "{:?}", s.warnings);
+    assert!(clamped[0].contains("scene.toml:17:") && clamped[0].contains("`bad`") && clamped[0].contains("Kd"));
     let msg = error_of(&toml.replace("kd = [1.0, 0.5, 0.5]", "kd = [-0.1, 0.5, 0.5]"));
-    assert!(msg.contains("Kd"), "{msg}");
+    assert!(msg.contains("scene.toml:17:") && msg.contains("Kd"), "{msg}");
 }
 
 #[test]

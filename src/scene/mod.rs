@@ -169,11 +169,14 @@ impl Default for RenderParams {
     }
 }
 
-/// A surface material, in the MTL meanings radray uses.
+/// A surface material, in the MTL meanings radray uses. How each MTL statement (including `illum`,
+/// `Tr` and `Tf`) lands in these fields is documented in `material::mtl` and the README's table.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
-    /// `Kd`: Lambertian reflectance per channel, in [0, 1).
+    /// `Kd`: Lambertian reflectance per channel, in [0, 1): already clamped to
+    /// `material::ALBEDO_CEILING`. With a `map_Kd` texture this is the fallback used when the
+    /// texture cannot be read; the texture itself is multiplied by `textures.diffuse.factor`.
     pub diffuse_reflectance: Vec3,
     /// `Ke`: emitted radiance (W·sr⁻¹·m⁻², or the scene's units), from the front side only.
     pub emitted_radiance: Vec3,
@@ -183,8 +186,46 @@ pub struct Material {
     pub phong_exponent: Option<f32>,
     /// `Ni`: index of refraction (used when transmittance > 0).
     pub ior: f32,
-    /// `1 − d`: transmittance of a smooth dielectric; 0 for opaque.
+    /// Transmittance of a smooth dielectric (`1 − d`, `Tr`, or a transparent `illum` model); 0 for
+    /// opaque.
     pub transmittance: f32,
+    /// Colour that multiplies the light a dielectric transmits, per channel, with its largest channel
+    /// 1 (white = clear); the overall amount is `transmittance`. From `Tf` (see `material::mtl`).
+    pub transmission_filter: Vec3,
+    /// The MTL `illum` model as written, `None` when absent (or for a TOML material). Its meaning is
+    /// already folded into the fields above; kept for reports.
+    pub illum: Option<u8>,
+    /// Texture maps (`map_Kd`, `map_d`, `map_Ke`); empty for TOML materials.
+    pub textures: MaterialTextures,
+}
+
+/// One texture map statement of a material: the file (resolved against the MTL's folder, not yet
+/// read) and the constant it is multiplied by.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureMap {
+    pub path: PathBuf,
+    /// `Kd` for `map_Kd`, `Ke` (or 1 when `Ke` is absent or black) for `map_Ke`, 1 for `map_d`.
+    pub factor: Vec3,
+    /// The MTL statement that named it.
+    pub source: SourceLoc,
+}
+
+/// The texture maps of a material. Loading and filtering them is `material::texture`'s job.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct MaterialTextures {
+    /// `map_Kd`: diffuse albedo (sRGB-encoded colour); its alpha channel, if any, cuts out the surface
+    /// when there is no `map_d`.
+    pub diffuse: Option<TextureMap>,
+    /// `map_d`: opacity (linear; the file's alpha channel if it has one, else its first channel).
+    pub opacity: Option<TextureMap>,
+    /// `map_Ke`: emitted radiance (sRGB-encoded colour).
+    pub emission: Option<TextureMap>,
+}
+
+impl MaterialTextures {
+    pub fn is_empty(&self) -> bool {
+        self.diffuse.is_none() && self.opacity.is_none() && self.emission.is_none()
+    }
 }
 
 impl Material {
@@ -197,6 +238,9 @@ impl Material {
             phong_exponent: None,
             ior: 1.0,
             transmittance: 0.0,
+            transmission_filter: Vec3::ONE,
+            illum: None,
+            textures: MaterialTextures::default(),
         }
     }
 

@@ -1,9 +1,12 @@
-//! OBJ/MTL loading through tobj: the only user of tobj. Faces become `Surface`s (triangles and quads
-//! as they are, larger or non-convex polygons as triangle fans); MTL entries become `Material`s in
-//! radray's meanings (`Kd`, `Ke` radiance, `Ks`, `Ns`, `Ni`, `d`).
+//! OBJ loading through tobj: the only user of tobj. Faces become `Surface`s (triangles and quads
+//! as they are, larger or non-convex polygons as triangle fans). The MTL libraries an OBJ names are
+//! read by `material::mtl` (tobj's MTL reader panics on `Kd 1`, drops line numbers and keeps one value
+//! per unknown statement), and handed to tobj only as names, so that `usemtl` resolves as before.
 
 use super::{Material, SourceLoc, Surface};
+use crate::material::mtl::{self, MtlError};
 use glam::Vec3;
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 
 /// What went wrong reading an OBJ or MTL file.
@@ -19,6 +22,8 @@ pub enum ObjError {
     Mtl { path: PathBuf, message: String },
     #[error("{path}: face uses material `{name}`, which its material library does not define")]
     UnknownMaterial { path: PathBuf, name: String },
+    #[error(transparent)]
+    MtlContent(MtlError),
 }
 
 /// The surfaces and materials of one OBJ file. Material indices in `surfaces` are local to
@@ -90,33 +95,50 @@ fn validate_text(path: &Path, text: &str) -> Result<(), ObjError> {
     Ok(())
 }
 
-fn vec3(a: Option<[f32; 3]>) -> Vec3 {
-    a.map(Vec3::from).unwrap_or(Vec3::ZERO)
-}
-
-fn material_from_mtl(m: &tobj::Material) -> Material {
-    Material {
-        name: m.name.clone(),
-        diffuse_reflectance: vec3(m.diffuse),
-        emitted_radiance: vec3(m.emissive),
-        specular_reflectance: vec3(m.specular),
-        // Only an explicit, positive and finite `Ns` asks for a highlight.
-        phong_exponent: m.shininess.filter(|&n| n > 0.0 && n.is_finite()),
-        ior: m.optical_density.unwrap_or(1.0),
-        transmittance: 1.0 - m.dissolve.unwrap_or(1.0),
-    }
-}
-
 /// Loads an OBJ file and its MTL library.
 pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
     let text = std::fs::read_to_string(path).map_err(|source| ObjError::Read { path: path.to_path_buf(), source })?;
     validate_text(path, &text)?;
     let options = tobj::LoadOptions { single_index: true, triangulate: false, ignore_points: true, ignore_lines: true };
-    let (models, materials) = tobj::load_obj(path, &options)
-        .map_err(|e| ObjError::Load { path: path.to_path_buf(), message: e.to_string() })?;
-    let materials = materials.map_err(|e| ObjError::Mtl { path: path.to_path_buf(), message: e.to_string() })?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    // Libraries in `mtllib` order; tobj numbers materials in the same order.
+    let libraries: RefCell<Vec<mtl::MtlLibrary>> = RefCell::new(Vec::new());
+    let failure: RefCell<Option<ObjError>> = RefCell::new(None);
+    let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(text.as_bytes()), &options, |name| {
+        let mtl_path = dir.join(name);
+        match mtl::load(&mtl_path) {
+            Ok(library) => {
+                let names =
+                    library.materials.iter().map(|m| tobj::Material { name: m.name.clone(), ..Default::default() });
+                let names: Vec<tobj::Material> = names.collect();
+                // The last definition of a repeated name wins (the library warned about it).
+                let index = names.iter().enumerate().map(|(i, m)| (m.name.clone(), i)).collect();
+                libraries.borrow_mut().push(library);
+                Ok((names, index))
+            }
+            Err(e) => {
+                let error = match e {
+                    MtlError::Read { path: mtl_path, source } => ObjError::Mtl {
+                        path: path.to_path_buf(),
+                        message: format!("material library `{}` cannot be read: {source}", mtl_path.display()),
+                    },
+                    other => ObjError::MtlContent(other),
+                };
+                failure.borrow_mut().get_or_insert(error);
+                Err(tobj::LoadError::MaterialParseError)
+            }
+        }
+    });
+    if let Some(error) = failure.into_inner() {
+        return Err(error);
+    }
+    let (models, _) = loaded.map_err(|e| ObjError::Load { path: path.to_path_buf(), message: e.to_string() })?;
 
-    let mut out = ObjContents { materials: materials.iter().map(material_from_mtl).collect(), ..Default::default() };
+    let mut out = ObjContents::default();
+    for library in libraries.into_inner() {
+        out.materials.extend(library.materials);
+        out.warnings.extend(library.warnings);
+    }
     let mut default_material = None;
     let loc = SourceLoc { path: path.to_path_buf(), line: 0 };
     for model in &models {

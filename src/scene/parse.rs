@@ -217,6 +217,7 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
 
     // The camera is checked first: it needs no geometry, and its errors are the cheapest to fix.
     let explicit_camera = raw.camera.as_ref().map(|c| camera(&loc, c)).transpose()?;
+    let mut warnings = Vec::new();
     let mut materials: Vec<Material> = Vec::new();
     let mut material_lines: Vec<std::ops::Range<usize>> = Vec::new();
     for m in &raw.material {
@@ -239,6 +240,9 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
         if let Some(d) = loc.ranged(&m.d, "d (dissolve)", |x| (0.0..=1.0).contains(&x), "in [0, 1]")? {
             material.transmittance = 1.0 - d;
         }
+        if let Some(clamped) = crate::material::clamp_albedo(&mut material) {
+            warnings.push(format!("{}: {clamped}", loc.at(m.kd.as_ref().map_or(span.clone(), |s| s.span()))));
+        }
         if let Err((field, message)) = check_material(&material) {
             let field_span = match field {
                 MaterialField::Kd => m.kd.as_ref().map(|s| s.span()),
@@ -259,7 +263,6 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
     };
 
     let mut surfaces: Vec<Surface> = Vec::new();
-    let mut warnings = Vec::new();
     let inline = |span: std::ops::Range<usize>| loc.at(span);
     // A [[quad]] and a [[triangle]] are the same thing: a polygon given corner by corner.
     let quads = raw.quad.iter().map(|q| {
