@@ -5,6 +5,7 @@
 
 pub mod form_factors;
 pub mod hemicube;
+pub mod hierarchy;
 pub mod progressive;
 pub mod solution;
 pub mod solver;
