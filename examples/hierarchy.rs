@@ -51,12 +51,18 @@ fn main() -> ExitCode {
     let result = hierarchy::solve(&scene, &params, &mut |p| match p {
         HierarchyProgress::Refining { pass, round, links, nodes } => {
             if round % 4 == 0 {
-                eprintln!("[{:7.1}s] pass {pass} round {round}: {links} links kept, {nodes} nodes", start.elapsed().as_secs_f64())
+                eprintln!(
+                    "[{:7.1}s] pass {pass} round {round}: {links} links kept, {nodes} nodes",
+                    start.elapsed().as_secs_f64()
+                )
             }
         }
         HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
             if sweep % 10 == 0 {
-                eprintln!("[{:7.1}s] pass {pass} sweep {sweep}: change {max_change:.3e} of {max_exitance:.3e}", start.elapsed().as_secs_f64())
+                eprintln!(
+                    "[{:7.1}s] pass {pass} sweep {sweep}: change {max_change:.3e} of {max_exitance:.3e}",
+                    start.elapsed().as_secs_f64()
+                )
             }
         }
     });

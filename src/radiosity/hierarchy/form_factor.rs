@@ -70,11 +70,9 @@ fn clip_to_half_space(polygon: &[Vec3], p: DVec3, n: DVec3, out: &mut [DVec3; 8]
         let b = polygon[(i + 1) % m].as_dvec3();
         let da = n.dot(a - p);
         let db = n.dot(b - p);
-        if da >= 0.0 {
-            if count < 8 {
-                out[count] = a;
-                count += 1;
-            }
+        if da >= 0.0 && count < 8 {
+            out[count] = a;
+            count += 1;
         }
         if (da >= 0.0) != (db >= 0.0) {
             let t = da / (da - db);

@@ -117,7 +117,8 @@ pub fn link_error_power(nodes: &Nodes, receiver: usize, source: usize, spread: f
 ///   element end's plane.
 pub fn estimate(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source: usize) -> Option<(f32, f32)> {
     if !nodes.is_cluster[receiver] && !nodes.is_cluster[source] {
-        let (mean, error) = element_to_element(&nodes.corners[receiver], nodes.normal[receiver], &nodes.corners[source]);
+        let (mean, error) =
+            element_to_element(&nodes.corners[receiver], nodes.normal[receiver], &nodes.corners[source]);
         if !(mean > 0.0 || error > 0.0) {
             return None;
         }

@@ -224,12 +224,8 @@ pub fn solve(
     let root = root as usize;
     let accel = Accel::build(&tracing.positions, &tracing.triangles);
     let diagonal = scene.diagonal();
-    let ctx = VisibilityContext {
-        accel: &accel,
-        rays: params.visibility_rays,
-        offset: diagonal * 1e-5,
-        seed: params.seed,
-    };
+    let ctx =
+        VisibilityContext { accel: &accel, rays: params.visibility_rays, offset: diagonal * 1e-5, seed: params.seed };
     let reference_exitance = mean_emitted_exitance(&nodes, &inputs);
     let settings = RefineSettings {
         threshold: params.error_threshold * reference_exitance,
@@ -302,7 +298,12 @@ fn mean_emitted_exitance(nodes: &Nodes, inputs: &clusters::InputTriangles) -> f6
     }
 }
 
-fn solution(nodes: &Nodes, inputs: &clusters::InputTriangles, root: usize, mut stats: HierarchyStats) -> HierarchicalSolution {
+fn solution(
+    nodes: &Nodes,
+    inputs: &clusters::InputTriangles,
+    root: usize,
+    mut stats: HierarchyStats,
+) -> HierarchicalSolution {
     let mesh = interpolate::leaf_mesh(nodes, inputs, root);
     let leaves = &mesh.leaf_node;
     stats.elements = leaves.len();

@@ -82,7 +82,14 @@ impl Nodes {
     }
 
     /// Appends an element (input triangle or a piece of one) and returns its index.
-    pub fn push_element(&mut self, corners: [Vec3; 3], input: u32, level: u8, reflectance: Vec3, emission: Vec3) -> u32 {
+    pub fn push_element(
+        &mut self,
+        corners: [Vec3; 3],
+        input: u32,
+        level: u8,
+        reflectance: Vec3,
+        emission: Vec3,
+    ) -> u32 {
         let cross = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
         let area = 0.5 * cross.length();
         let normal = cross.normalize_or_zero();

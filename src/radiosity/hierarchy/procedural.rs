@@ -4,7 +4,9 @@
 
 use glam::{vec3, Vec3};
 
-use crate::scene::{Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SourceLoc, Surface};
+use crate::scene::{
+    Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SourceLoc, Surface,
+};
 
 /// Sphere tessellation: segments around, rings from pole to pole (2·S·(R − 1) triangles).
 const SPHERE_SEGMENTS: u32 = 24;
@@ -111,7 +113,9 @@ fn sphere(centre: Vec3, radius: f32, material: u32, add: &mut impl FnMut(Vec<Vec
 
 /// An axis-aligned cube with outward faces, each as one quad.
 fn cube(lo: Vec3, hi: Vec3, material: u32, add: &mut impl FnMut(Vec<Vec3>, u32)) {
-    let c = |x: bool, y: bool, z: bool| vec3(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z });
+    let c = |x: bool, y: bool, z: bool| {
+        vec3(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z })
+    };
     let (f, t) = (false, true);
     let faces = [
         [c(f, f, f), c(f, f, t), c(f, t, t), c(f, t, f)], // −x

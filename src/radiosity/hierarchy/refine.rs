@@ -66,10 +66,7 @@ pub fn refine(
     settings: &RefineSettings,
     on_round: &mut dyn FnMut(u32, usize, usize),
 ) -> RefineOutcome {
-    let mut out = RefineOutcome {
-        error_before_w: total_error(nodes, &records),
-        ..Default::default()
-    };
+    let mut out = RefineOutcome { error_before_w: total_error(nodes, &records), ..Default::default() };
     let mut kept: Vec<LinkRecord> = Vec::with_capacity(records.len());
     let mut work = records;
     let mut pending_self = self_links;
@@ -113,12 +110,12 @@ pub fn refine(
             let child_links = if nodes.is_leaf(split) { 4 } else { nodes.children(split).len() };
             let bytes = (nodes.len() + new_nodes) * NODE_BYTES
                 + (kept.len() + next.len() + child_links + work_len) * LINK_BYTES;
-            out.peak_bytes = out.peak_bytes.max(bytes);
             if bytes > settings.budget_bytes {
                 out.budget_exceeded = true;
                 kept.push(link);
                 continue;
             }
+            out.peak_bytes = out.peak_bytes.max(bytes);
             if nodes.is_leaf(split) {
                 nodes.subdivide(split);
             }
@@ -200,8 +197,11 @@ fn choose_split(nodes: &Nodes, r: usize, s: usize, min_area: f32, source_varies_
             None
         };
     }
-    let (first, second) =
-        if nodes.area[r] >= nodes.area[s] { (Split::Receiver, Split::Source) } else { (Split::Source, Split::Receiver) };
+    let (first, second) = if nodes.area[r] >= nodes.area[s] {
+        (Split::Receiver, Split::Source)
+    } else {
+        (Split::Source, Split::Receiver)
+    };
     let node_of = |side: &Split| match side {
         Split::Receiver => r,
         Split::Source => s,

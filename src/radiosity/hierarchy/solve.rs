@@ -40,13 +40,7 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, root: usize, relaxation: f64) -> 
         let g = down + own;
         if nodes.is_leaf(n) {
             let old = nodes.exitance[n];
-            let new = leaf_exitance(
-                nodes.emission[n].as_dvec3(),
-                nodes.reflectance[n].as_dvec3(),
-                g,
-                old,
-                relaxation,
-            );
+            let new = leaf_exitance(nodes.emission[n].as_dvec3(), nodes.reflectance[n].as_dvec3(), g, old, relaxation);
             nodes.exitance[n] = new;
             nodes.exitance_mean[n] = mean_channel(new);
             change.max_change = change.max_change.max((new - old).abs().max_element());
