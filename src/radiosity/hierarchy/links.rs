@@ -105,6 +105,26 @@ pub fn link_error_power(nodes: &Nodes, receiver: usize, source: usize, spread: f
     nodes.area[receiver] as f64 * link_error(nodes, receiver, source, spread)
 }
 
+/// Whether the point-to-point cluster formula may stand for link (receiver ← source) at all: always
+/// for two elements (their estimator is exact in the source); with a cluster end, only when the ends'
+/// bounding spheres are disjoint and neither sphere crosses an element end's plane. Refinement splits
+/// an inadmissible link whatever its error, so that no near pair of clusters is ever linked with a
+/// meaningless form factor (their sum could exceed 1 and the sweeps diverge).
+pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
+    if !nodes.is_cluster[receiver] && !nodes.is_cluster[source] {
+        return true;
+    }
+    let d = nodes.centre[receiver].distance(nodes.centre[source]);
+    if !(d > nodes.radius[receiver] + nodes.radius[source]) {
+        return false;
+    }
+    let straddles = |element: usize, other: usize| {
+        !nodes.is_cluster[element]
+            && nodes.normal[element].dot(nodes.centre[other] - nodes.centre[element]).abs() < nodes.radius[other]
+    };
+    !(straddles(receiver, source) || straddles(source, receiver))
+}
+
 /// Estimates the form factor of link (receiver ← source) and its error spread; `None` when nothing can
 /// pass (the ends face away from each other, or no ray gets through and the estimate is reliable).
 ///
@@ -144,11 +164,7 @@ pub fn estimate(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source:
     let ps = projected(source, towards_receiver);
     let pr = projected(receiver, -towards_receiver);
     let f = cluster_form_factor(ps, pr, nodes.area[receiver], d);
-    let straddles = |element: usize, other: usize| {
-        !nodes.is_cluster[element]
-            && nodes.normal[element].dot(nodes.centre[other] - nodes.centre[element]).abs() < nodes.radius[other]
-    };
-    let bound = if straddles(receiver, source) || straddles(source, receiver) {
+    let bound = if !admissible(nodes, receiver, source) {
         1.0
     } else {
         cluster_form_factor_bound(f, d, nodes.radius[receiver] + nodes.radius[source])

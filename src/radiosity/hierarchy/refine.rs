@@ -6,7 +6,7 @@
 
 use rayon::prelude::*;
 
-use super::links::{estimate, link_error, link_error_power, LinkRecord, Links, LINK_BYTES};
+use super::links::{admissible, estimate, link_error, link_error_power, LinkRecord, Links, LINK_BYTES};
 use super::nodes::{Nodes, NODE_BYTES};
 use super::visibility::VisibilityContext;
 
@@ -94,7 +94,8 @@ pub fn refine(
             let (r, s) = (link.receiver as usize, link.source as usize);
             let geometric = link_error(nodes, r, s, link.spread);
             let source_variation = source_variation_error(nodes, r, s, link.form_factor);
-            if !(geometric + source_variation > settings.threshold) {
+            let must_split = !admissible(nodes, r, s);
+            if !must_split && !(geometric + source_variation > settings.threshold) {
                 kept.push(link);
                 continue;
             }
