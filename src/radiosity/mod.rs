@@ -6,6 +6,7 @@
 
 pub mod fingerprint;
 pub mod hemicube;
+pub mod hierarchy;
 pub mod matrix;
 pub mod matrix_free;
 pub mod method;

@@ -1,0 +1,140 @@
+//! The cluster tree over the input triangles (Smits, Arvo and Greenberg 1994; Sillion 1995): scene
+//! surfaces become triangles (quads split in two, two-sided surfaces get a reversed back copy), and a
+//! binary tree of clusters over them is built by spatial-median splits, so that initial linking starts
+//! from one root self-link instead of O(s²) surface pairs.
+
+use glam::Vec3;
+
+use super::nodes::{Nodes, NONE};
+use super::HierarchyError;
+use crate::scene::SceneDescription;
+
+/// Cold data of the input triangles (index = input triangle).
+#[derive(Clone, Debug, Default)]
+pub struct InputTriangles {
+    /// Scene surface the triangle comes from.
+    pub surface: Vec<u32>,
+    /// The reversed back copy of a two-sided surface.
+    pub back: Vec<bool>,
+    pub material: Vec<u32>,
+    /// Node of the triangle in `Nodes`.
+    pub node: Vec<u32>,
+}
+
+/// Triangles for the ray accelerator: one per front input triangle.
+#[derive(Clone, Debug, Default)]
+pub struct TracingTriangles {
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Turns the scene's surfaces into input-triangle nodes and builds the cluster tree over them.
+/// Returns the nodes (root = the returned index), the input triangles and the tracing triangles.
+pub fn build(scene: &SceneDescription) -> Result<(Nodes, u32, InputTriangles, TracingTriangles), HierarchyError> {
+    let mut nodes = Nodes::default();
+    let mut inputs = InputTriangles::default();
+    let mut tracing = TracingTriangles::default();
+    let mut corners_of: Vec<[Vec3; 3]> = Vec::new();
+    let mut meta: Vec<(u32, bool, u32)> = Vec::new();
+    for (s, surface) in scene.surfaces.iter().enumerate() {
+        if scene.materials.get(surface.material as usize).is_none() {
+            return Err(HierarchyError::UnknownMaterial {
+                surface: s,
+                material: surface.material,
+                location: surface.source.to_string(),
+            });
+        }
+        let v = &surface.vertices;
+        let fan: Vec<[Vec3; 3]> = match v.len() {
+            3 => vec![[v[0], v[1], v[2]]],
+            4 => vec![[v[0], v[1], v[2]], [v[0], v[2], v[3]]],
+            n => {
+                return Err(HierarchyError::NotTriangleOrQuad {
+                    surface: s,
+                    vertices: n,
+                    location: surface.source.to_string(),
+                })
+            }
+        };
+        for tri in fan {
+            let area = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length();
+            if !(area > 0.0) || !area.is_finite() {
+                continue; // degenerate: carries no energy, and the parser already warned
+            }
+            let base = tracing.positions.len() as u32;
+            tracing.positions.extend_from_slice(&tri);
+            tracing.triangles.push([base, base + 1, base + 2]);
+            corners_of.push(tri);
+            meta.push((s as u32, false, surface.material));
+            if surface.two_sided {
+                corners_of.push([tri[0], tri[2], tri[1]]);
+                meta.push((s as u32, true, surface.material));
+            }
+        }
+    }
+    if corners_of.is_empty() {
+        return Err(HierarchyError::NoSurfaces);
+    }
+    let count = corners_of.len();
+    inputs.surface = meta.iter().map(|m| m.0).collect();
+    inputs.back = meta.iter().map(|m| m.1).collect();
+    inputs.material = meta.iter().map(|m| m.2).collect();
+    inputs.node = vec![NONE; count];
+    let centroid: Vec<Vec3> = corners_of.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
+    let mut push_input = |nodes: &mut Nodes, i: usize| -> u32 {
+        let m = &scene.materials[meta[i].2 as usize];
+        let node = nodes.push_element(corners_of[i], i as u32, 0, m.diffuse_reflectance, m.emitted_exitance());
+        inputs.node[i] = node;
+        node
+    };
+    let all: Vec<u32> = (0..count as u32).collect();
+    if count == 1 {
+        let root = push_input(&mut nodes, 0);
+        return Ok((nodes, root, inputs, tracing));
+    }
+    // Breadth-first: each cluster's two children are pushed together, so they are contiguous.
+    let root = nodes.push_cluster_slot();
+    let mut queue = std::collections::VecDeque::from([(root, all)]);
+    let mut aggregate = Vec::new();
+    while let Some((cluster, items)) = queue.pop_front() {
+        let (left, right) = median_split(&centroid, items);
+        let first = nodes.len() as u32;
+        for part in [left, right] {
+            if part.len() == 1 {
+                push_input(&mut nodes, part[0] as usize);
+            } else {
+                let slot = nodes.push_cluster_slot();
+                queue.push_back((slot, part));
+            }
+        }
+        aggregate.push((cluster, first));
+    }
+    // Children were created after their parents: aggregate in reverse creation order.
+    for &(cluster, first) in aggregate.iter().rev() {
+        nodes.set_cluster_children(cluster as usize, first, 2);
+    }
+    Ok((nodes, root, inputs, tracing))
+}
+
+/// Splits `items` (at least two) at the median of their centroids along the longest axis of the
+/// centroids' bounds; ties are broken by index, so the split is deterministic.
+fn median_split(centroid: &[Vec3], mut items: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
+    let (lo, hi) = items
+        .iter()
+        .map(|&i| centroid[i as usize])
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
+    let extent = hi - lo;
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    let mid = items.len() / 2;
+    items.select_nth_unstable_by(mid, |&a, &b| {
+        centroid[a as usize][axis].total_cmp(&centroid[b as usize][axis]).then(a.cmp(&b))
+    });
+    let right = items.split_off(mid);
+    (items, right)
+}

@@ -1,0 +1,273 @@
+//! The nodes of the hierarchy as structs of arrays: clusters (groups of input triangles), input
+//! triangles, and the elements that 1→4 midpoint subdivision makes below them on demand.
+
+use glam::{DVec3, Vec3};
+
+use super::form_factor::projected_area_bins;
+
+/// "No node": a leaf's `first_child`, the root's `parent`, a cluster's `input`.
+pub const NONE: u32 = u32::MAX;
+
+/// Bytes one node costs in `Nodes` (the sum of its per-node fields), for the memory budget.
+pub const NODE_BYTES: usize = std::mem::size_of::<bool>()
+    + 3 * std::mem::size_of::<u32>()
+    + std::mem::size_of::<u8>() * 2
+    + std::mem::size_of::<[Vec3; 3]>()
+    + 4 * std::mem::size_of::<Vec3>()
+    + 3 * std::mem::size_of::<f32>()
+    + std::mem::size_of::<[f32; 6]>()
+    + 2 * std::mem::size_of::<DVec3>()
+    + std::mem::size_of::<f64>();
+
+/// All nodes of the hierarchy. Children of a node are contiguous: `first_child .. first_child +
+/// child_count`. Clusters have two children (clusters or input triangles); a subdivided element has
+/// four. Hot per-node data (geometry, reflectance, exitance) is kept in parallel arrays.
+#[derive(Clone, Debug, Default)]
+pub struct Nodes {
+    pub is_cluster: Vec<bool>,
+    pub parent: Vec<u32>,
+    pub first_child: Vec<u32>,
+    pub child_count: Vec<u8>,
+    /// Subdivision depth below the input triangle (0 for input triangles and clusters).
+    pub level: Vec<u8>,
+    /// Input triangle an element lies in (`NONE` for clusters).
+    pub input: Vec<u32>,
+    /// Element corners, counter-clockwise seen from the front; zero for clusters.
+    pub corners: Vec<[Vec3; 3]>,
+    /// Unit front normal of an element; zero for clusters.
+    pub normal: Vec<Vec3>,
+    /// Centroid of an element, centre of the bounding box of a cluster.
+    pub centre: Vec<Vec3>,
+    /// Diffuse reflectance (area-weighted mean for a cluster).
+    pub reflectance: Vec<Vec3>,
+    /// Emitted exitance E = π·Ke, W/m² (area-weighted mean for a cluster).
+    pub emission: Vec<Vec3>,
+    /// Surface area (sum over the contents for a cluster).
+    pub area: Vec<f32>,
+    /// Radius of a sphere about `centre` holding the node.
+    pub radius: Vec<f32>,
+    /// Largest channel of the reflectance, area-averaged over a cluster's children (the ρ of the
+    /// error estimate; area-averaging keeps refinement's error sums from growing).
+    pub reflectance_max: Vec<f32>,
+    /// Six-bin projected-area model (see `form_factor::projected_area_bins`).
+    pub projected_bins: Vec<[f32; 6]>,
+    /// Exitance B (W/m²); for an inner node, the area-weighted mean of its children's.
+    pub exitance: Vec<DVec3>,
+    /// Irradiance gathered over the node's own links in the last sweep (W/m², before ρ).
+    pub gathered: Vec<DVec3>,
+    /// Mean channel of `exitance`, the B of the error estimate (linear, so pulling commutes with it).
+    pub exitance_mean: Vec<f64>,
+}
+
+impl Nodes {
+    pub fn len(&self) -> usize {
+        self.is_cluster.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.is_cluster.is_empty()
+    }
+
+    pub fn children(&self, node: usize) -> std::ops::Range<usize> {
+        let first = self.first_child[node];
+        if first == NONE {
+            0..0
+        } else {
+            first as usize..first as usize + self.child_count[node] as usize
+        }
+    }
+
+    pub fn is_leaf(&self, node: usize) -> bool {
+        self.first_child[node] == NONE
+    }
+
+    /// Appends an element (input triangle or a piece of one) and returns its index.
+    pub fn push_element(
+        &mut self,
+        corners: [Vec3; 3],
+        input: u32,
+        level: u8,
+        reflectance: Vec3,
+        emission: Vec3,
+    ) -> u32 {
+        let cross = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+        let area = 0.5 * cross.length();
+        let normal = cross.normalize_or_zero();
+        let centre = (corners[0] + corners[1] + corners[2]) / 3.0;
+        let radius = corners.iter().map(|c| c.distance(centre)).fold(0.0f32, f32::max);
+        self.push(Pushed {
+            is_cluster: false,
+            input,
+            level,
+            corners,
+            normal,
+            centre,
+            reflectance,
+            emission,
+            area,
+            radius,
+            reflectance_max: reflectance.max_element(),
+            projected_bins: projected_area_bins(normal, area),
+        })
+    }
+
+    /// Appends a cluster with no children yet (see `set_cluster_children`).
+    pub fn push_cluster_slot(&mut self) -> u32 {
+        self.push(Pushed {
+            is_cluster: true,
+            input: NONE,
+            level: 0,
+            corners: [Vec3::ZERO; 3],
+            normal: Vec3::ZERO,
+            centre: Vec3::ZERO,
+            reflectance: Vec3::ZERO,
+            emission: Vec3::ZERO,
+            area: 0.0,
+            radius: 0.0,
+            reflectance_max: 0.0,
+            projected_bins: [0.0; 6],
+        })
+    }
+
+    fn push(&mut self, n: Pushed) -> u32 {
+        let index = self.len() as u32;
+        self.is_cluster.push(n.is_cluster);
+        self.parent.push(NONE);
+        self.first_child.push(NONE);
+        self.child_count.push(0);
+        self.level.push(n.level);
+        self.input.push(n.input);
+        self.corners.push(n.corners);
+        self.normal.push(n.normal);
+        self.centre.push(n.centre);
+        self.reflectance.push(n.reflectance);
+        self.emission.push(n.emission);
+        self.area.push(n.area);
+        self.radius.push(n.radius);
+        self.reflectance_max.push(n.reflectance_max);
+        self.projected_bins.push(n.projected_bins);
+        self.exitance.push(n.emission.as_dvec3());
+        self.gathered.push(DVec3::ZERO);
+        self.exitance_mean.push(mean_channel(n.emission.as_dvec3()));
+        index
+    }
+
+    /// Makes the contiguous nodes `first .. first + count` the children of cluster `cluster` and sets
+    /// the cluster's aggregate fields from them (area sums, area-weighted means, bounding box).
+    pub fn set_cluster_children(&mut self, cluster: usize, first: u32, count: u8) {
+        self.first_child[cluster] = first;
+        self.child_count[cluster] = count;
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        let mut area = 0.0f32;
+        let (mut rho, mut emission, mut rho_max) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
+        let mut bins = [0.0f32; 6];
+        let mut exitance = DVec3::ZERO;
+        for c in first as usize..first as usize + count as usize {
+            self.parent[c] = cluster as u32;
+            let a = self.area[c];
+            area += a;
+            rho += self.reflectance[c] * a;
+            emission += self.emission[c] * a;
+            rho_max += self.reflectance_max[c] * a;
+            exitance += self.exitance[c] * a as f64;
+            for (b, x) in bins.iter_mut().zip(self.projected_bins[c]) {
+                *b += x;
+            }
+            let (clo, chi) = self.bounds(c);
+            lo = lo.min(clo);
+            hi = hi.max(chi);
+        }
+        let inv = if area > 0.0 { 1.0 / area } else { 0.0 };
+        self.area[cluster] = area;
+        self.reflectance[cluster] = rho * inv;
+        self.emission[cluster] = emission * inv;
+        self.reflectance_max[cluster] = rho_max * inv;
+        self.projected_bins[cluster] = bins;
+        self.exitance[cluster] = exitance * inv as f64;
+        self.exitance_mean[cluster] = mean_channel(self.exitance[cluster]);
+        self.centre[cluster] = (lo + hi) * 0.5;
+        self.radius[cluster] = (hi - lo).length() * 0.5;
+    }
+
+    /// Axis-aligned bounds of a node (corners of an element, sphere box of a cluster).
+    fn bounds(&self, node: usize) -> (Vec3, Vec3) {
+        if self.is_cluster[node] {
+            let r = Vec3::splat(self.radius[node]);
+            (self.centre[node] - r, self.centre[node] + r)
+        } else {
+            let c = self.corners[node];
+            (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]))
+        }
+    }
+
+    /// Splits leaf element `node` 1→4 at its edge midpoints (children inherit material and exitance,
+    /// so the pulled value of the parent is unchanged) and returns the first child. The midpoint of
+    /// edge (a, b) is computed as (a + b)·0.5, which is symmetric in a and b, so neighbours compute
+    /// bit-identical vertices.
+    pub fn subdivide(&mut self, node: usize) -> u32 {
+        assert!(!self.is_cluster[node] && self.is_leaf(node), "only leaf elements subdivide");
+        let [a, b, c] = self.corners[node];
+        let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+        let (input, level) = (self.input[node], self.level[node].saturating_add(1));
+        let (rho, e) = (self.reflectance[node], self.emission[node]);
+        let parent_area = self.area[node];
+        let exitance = self.exitance[node];
+        let first = self.len() as u32;
+        for tri in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
+            let child = self.push_element(tri, input, level, rho, e) as usize;
+            // Exact quarter areas and the parent's normal keep push-pull exactly conservative.
+            self.area[child] = parent_area * 0.25;
+            self.normal[child] = self.normal[node];
+            self.projected_bins[child] = projected_area_bins(self.normal[node], parent_area * 0.25);
+            self.exitance[child] = exitance;
+            self.exitance_mean[child] = mean_channel(exitance);
+            self.parent[child] = node as u32;
+        }
+        self.first_child[node] = first;
+        self.child_count[node] = 4;
+        first
+    }
+}
+
+/// Fields of one new node.
+struct Pushed {
+    is_cluster: bool,
+    input: u32,
+    level: u8,
+    corners: [Vec3; 3],
+    normal: Vec3,
+    centre: Vec3,
+    reflectance: Vec3,
+    emission: Vec3,
+    area: f32,
+    radius: f32,
+    reflectance_max: f32,
+    projected_bins: [f32; 6],
+}
+
+/// (r + g + b) / 3: the scalar exitance of the error estimate.
+pub fn mean_channel(v: DVec3) -> f64 {
+    (v.x + v.y + v.z) / 3.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::vec3;
+
+    #[test]
+    fn subdivision_makes_four_counter_clockwise_quarters() {
+        let mut nodes = Nodes::default();
+        let tri = [vec3(0.0, 0.0, 0.0), vec3(2.0, 0.0, 0.0), vec3(0.0, 2.0, 0.0)];
+        let root = nodes.push_element(tri, 0, 0, Vec3::splat(0.5), Vec3::ZERO) as usize;
+        let first = nodes.subdivide(root) as usize;
+        for c in first..first + 4 {
+            let k = nodes.corners[c];
+            let n = (k[1] - k[0]).cross(k[2] - k[0]);
+            assert!(n.z > 0.0, "child {c} is clockwise");
+            assert_eq!(nodes.area[c], 0.5);
+            assert_eq!(nodes.level[c], 1);
+            assert_eq!(nodes.parent[c], root as u32);
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! Gauss-Seidel with overrelaxation over the hierarchy: one sweep walks the tree depth-first; each
+//! node gathers over its links when it is reached (reading exitances in place, so later receivers see
+//! this sweep's values), pushes its irradiance to its children, and pulls their exitance back up as
+//! soon as they are done.
+
+use glam::DVec3;
+
+use super::gather::{gather, leaf_exitance, pulled};
+use super::links::Links;
+use super::nodes::{mean_channel, Nodes};
+
+/// What a sweep changed: the largest change of a leaf's exitance (any channel) and the largest leaf
+/// exitance after it (W/m²).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SweepChange {
+    pub max_change: f64,
+    pub max_exitance: f64,
+}
+
+/// One in-place sweep over the tree below `root` with relaxation factor ω:
+///
+/// G_n = G_parent + Σ_{S linked to n} F_nS B_S;  leaves: B ← B + ω(E + ρG − B);
+/// inner nodes: B = Σ_c A_c B_c / Σ_c A_c (after their children).
+///
+/// Serial and in a fixed order, so the result does not depend on threads. Updates `exitance`,
+/// `exitance_mean` and `gathered` (own links only) of every node.
+pub fn sweep(nodes: &mut Nodes, links: &Links, root: usize, relaxation: f64) -> SweepChange {
+    let mut change = SweepChange::default();
+    // Explicit stack: (node, irradiance from above, children visited?).
+    let mut stack: Vec<(usize, DVec3, bool)> = vec![(root, DVec3::ZERO, false)];
+    while let Some((n, down, expanded)) = stack.pop() {
+        if expanded {
+            let b = pulled(nodes, n, &nodes.exitance);
+            nodes.exitance[n] = b;
+            nodes.exitance_mean[n] = mean_channel(nodes.exitance[n]);
+            continue;
+        }
+        let own = gather(links, n, &nodes.exitance);
+        nodes.gathered[n] = own;
+        let g = down + own;
+        if nodes.is_leaf(n) {
+            let old = nodes.exitance[n];
+            let new = leaf_exitance(nodes.emission[n].as_dvec3(), nodes.reflectance[n].as_dvec3(), g, old, relaxation);
+            nodes.exitance[n] = new;
+            nodes.exitance_mean[n] = mean_channel(new);
+            change.max_change = change.max_change.max((new - old).abs().max_element());
+            change.max_exitance = change.max_exitance.max(new.max_element());
+        } else {
+            stack.push((n, down, true));
+            for c in nodes.children(n).rev() {
+                stack.push((c, g, false));
+            }
+        }
+    }
+    change
+}
+
+/// Sweeps until the largest leaf change is below `tolerance` × the largest leaf exitance, or
+/// `max_sweeps` are done. Returns the sweeps made and whether it converged.
+pub fn solve(
+    nodes: &mut Nodes,
+    links: &Links,
+    root: usize,
+    relaxation: f64,
+    tolerance: f64,
+    max_sweeps: u32,
+    on_sweep: &mut dyn FnMut(u32, SweepChange),
+) -> (u32, bool) {
+    for k in 1..=max_sweeps {
+        let c = sweep(nodes, links, root, relaxation);
+        on_sweep(k, c);
+        if c.max_change <= tolerance * c.max_exitance {
+            return (k, true);
+        }
+    }
+    (max_sweeps, false)
+}
+
+/// Sets every leaf to its emission and pulls the means up: the exitance that the first refinement
+/// pass measures link errors with (B = E before any bounce).
+pub fn reset_to_emission(nodes: &mut Nodes, root: usize) {
+    let mut order = Vec::new();
+    let mut stack = vec![root];
+    while let Some(n) = stack.pop() {
+        order.push(n);
+        stack.extend(nodes.children(n));
+    }
+    for &n in order.iter().rev() {
+        let b = if nodes.is_leaf(n) { nodes.emission[n].as_dvec3() } else { pulled(nodes, n, &nodes.exitance) };
+        nodes.exitance[n] = b;
+        nodes.exitance_mean[n] = mean_channel(b);
+    }
+}
