@@ -297,7 +297,10 @@ fn compare_command(args: &CompareArgs) -> Result<(), Failure> {
             format!("rmse              {:.6e}", metrics.errors.rmse),
             format!("relMSE            {:.6e}", metrics.errors.rel_mse),
             format!("mean_abs_rel_err  {:.6e}", metrics.errors.mean_abs_rel_err),
-            format!("max_abs_diff      {:.6e} at pixel ({}, {}) channel {}", metrics.max_abs_diff, at.x, at.y, at.channel),
+            format!(
+                "max_abs_diff      {:.6e} at pixel ({}, {}) channel {}",
+                metrics.max_abs_diff, at.x, at.y, at.channel
+            ),
             format!("mean (a, b)       {:.6e}, {:.6e}", metrics.mean_test, metrics.mean_ref),
             format!("best scale        {:.6} (relMSE after scaling {:.6e})", metrics.scale, metrics.scaled.rel_mse),
             String::new(),

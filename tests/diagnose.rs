@@ -232,10 +232,8 @@ fn pinned_path() -> std::path::PathBuf {
 /// for byte on every shipped scene); re-approve only on purpose.
 #[test]
 fn shipped_scenes_keep_their_approved_findings() {
-    let measured: Vec<String> = PINNED
-        .iter()
-        .map(|name| format!("{name} {}", serde_json::to_string(&every_finding(name)).unwrap()))
-        .collect();
+    let measured: Vec<String> =
+        PINNED.iter().map(|name| format!("{name} {}", serde_json::to_string(&every_finding(name)).unwrap())).collect();
     if std::env::var_os("RADRAY_BLESS").is_some() {
         std::fs::write(pinned_path(), measured.join("\n") + "\n").unwrap();
         return;

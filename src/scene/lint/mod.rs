@@ -4,7 +4,8 @@
 //!
 //! Every check is a pure function of the surfaces, one per file. Candidate pairs come from a uniform
 //! grid over the faces' bounding boxes (`grid`, each pair visited once), so the cost grows with the
-//! number of nearby pairs, not with n². Geometry is evaluated in f64 (`polygon`). Lengths are compared
+//! number of nearby pairs, not with n²; pairs are examined in parallel (rayon) and their findings
+//! gathered in the pairs' order, so the report does not depend on the thread count. Geometry is evaluated in f64 (`polygon`). Lengths are compared
 //! with one absolute tolerance, `relative_tolerance` × the scene's bounding-box diagonal (never below
 //! the f32 spacing of the scene's coordinates): see [`LintOptions`]. This file holds the report's types
 //! and runs the checks; `report` prints it.
