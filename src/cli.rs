@@ -288,29 +288,46 @@ fn compare_command(args: &CompareArgs) -> Result<(), Failure> {
             run::write_image(&compare::side_by_side(&[&a, &b, &diff]), path, &neutral)?;
         }
     }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&metrics)?);
+    let text = if args.json {
+        format!("{}\n", serde_json::to_string_pretty(&metrics)?)
     } else {
         let at = &metrics.max_abs_diff_at;
-        println!("pixels            {}", metrics.pixels);
-        println!("rmse              {:.6e}", metrics.errors.rmse);
-        println!("relMSE            {:.6e}", metrics.errors.rel_mse);
-        println!("mean_abs_rel_err  {:.6e}", metrics.errors.mean_abs_rel_err);
-        println!("max_abs_diff      {:.6e} at pixel ({}, {}) channel {}", metrics.max_abs_diff, at.x, at.y, at.channel);
-        println!("mean (a, b)       {:.6e}, {:.6e}", metrics.mean_test, metrics.mean_ref);
-        println!("best scale        {:.6} (relMSE after scaling {:.6e})", metrics.scale, metrics.scaled.rel_mse);
-    }
-    Ok(())
+        [
+            format!("pixels            {}", metrics.pixels),
+            format!("rmse              {:.6e}", metrics.errors.rmse),
+            format!("relMSE            {:.6e}", metrics.errors.rel_mse),
+            format!("mean_abs_rel_err  {:.6e}", metrics.errors.mean_abs_rel_err),
+            format!(
+                "max_abs_diff      {:.6e} at pixel ({}, {}) channel {}",
+                metrics.max_abs_diff, at.x, at.y, at.channel
+            ),
+            format!("mean (a, b)       {:.6e}, {:.6e}", metrics.mean_test, metrics.mean_ref),
+            format!("best scale        {:.6} (relMSE after scaling {:.6e})", metrics.scale, metrics.scaled.rel_mse),
+            String::new(),
+        ]
+        .join("\n")
+    };
+    write_stdout(&text)
 }
 
 fn info_command(args: &InfoArgs) -> Result<(), Failure> {
     let overrides = Overrides { quality: args.quality.map(Into::into), ..Default::default() };
     let scene = run::load_scene(&args.scene, &overrides, &Progress::hidden())?;
     let report = crate::info::describe(&scene);
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print!("{report}");
+    let text = if args.json { format!("{}\n", serde_json::to_string_pretty(&report)?) } else { report.to_string() };
+    write_stdout(&text)
+}
+
+/// Writes a command's report to standard output. A reader that closes the pipe early (`radray info
+/// S.toml | head -3`) has all it wanted: a broken pipe ends the command cleanly instead of panicking
+/// as `println!` does.
+fn write_stdout(text: &str) -> Result<(), Failure> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Failure::internal(anyhow::anyhow!("cannot write to standard output: {e}")))
+        }
+        _ => Ok(()),
     }
-    Ok(())
 }

@@ -110,22 +110,25 @@ impl Mesh {
     /// Cuts every surface of the scene into elements of at most `max_element_edge` (see module docs).
     pub fn build(scene: &SceneDescription, max_element_edge: f32) -> Mesh {
         let mut mesh = Mesh::default();
+        // Two-sided surfaces with the ranges of elements and triangles their front side produced
+        // (one surface's pieces are contiguous), so mirroring them is linear in the mesh size.
         let mut back_sides = Vec::new();
         for (s, surface) in scene.surfaces.iter().enumerate() {
             let material = &scene.materials[surface.material as usize];
+            let (first_element, first_triangle) = (mesh.elements.len(), mesh.triangles.len());
             mesh.add_surface(&surface.vertices, s as u32, surface.material, material, max_element_edge);
             mesh.surface_source.push(s as u32);
             if surface.two_sided {
-                back_sides.push(s);
+                back_sides.push((s, first_element..mesh.elements.len(), first_triangle..mesh.triangles.len()));
             }
         }
         // Back sides come after all front sides: the same grid with reversed winding.
-        for s in back_sides {
+        for (s, front, front_triangles) in back_sides {
             let surface = &scene.surfaces[s];
             let material = &scene.materials[surface.material as usize];
             let mesh_surface = mesh.surface_source.len() as u32;
             mesh.surface_source.push(s as u32);
-            mesh.add_back_side(s as u32, mesh_surface, surface.material, material);
+            mesh.add_back_side(front, front_triangles, mesh_surface, surface.material, material);
         }
         mesh
     }
@@ -196,18 +199,23 @@ impl Mesh {
         }
     }
 
-    /// Mirrors the elements of scene surface `source` (already meshed) as a back side with its own
-    /// vertices and reversed winding, and links the front triangles to it.
-    fn add_back_side(&mut self, source: u32, mesh_surface: u32, material_index: u32, material: &Material) {
-        let front: Vec<usize> = (0..self.elements.len()).filter(|&e| self.elements.surface[e] == source).collect();
+    /// Mirrors the elements `front` of one scene surface (already meshed, with their triangles
+    /// `front_triangles`) as a back side with its own vertices and reversed winding, and links the front
+    /// triangles to it.
+    fn add_back_side(
+        &mut self,
+        front: std::ops::Range<usize>,
+        front_triangles: std::ops::Range<usize>,
+        mesh_surface: u32,
+        material_index: u32,
+        material: &Material,
+    ) {
         let mut triangles_of = std::collections::HashMap::<u32, Vec<usize>>::new();
-        for (t, &e) in self.triangle_element.iter().enumerate() {
-            if self.elements.surface[e as usize] == source {
-                triangles_of.entry(e).or_default().push(t);
-            }
+        for t in front_triangles {
+            triangles_of.entry(self.triangle_element[t]).or_default().push(t);
         }
         let mut remap = std::collections::HashMap::new();
-        for &e in &front {
+        for e in front {
             let c = self.elements.corners[e];
             let mut back = [NONE; 4];
             let n = self.elements.corner_count(e);

@@ -2,14 +2,16 @@
 //! each overlapping pair once.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
-/// Calls `visit(i, j)` (i < j) once for every pair of overlapping boxes `(lo, hi)`. A uniform grid of
-/// at most ~4n cells, sized from the boxes' mean extent; a pair found in several cells is visited only
-/// in the cell holding the low corner of the boxes' intersection.
-pub(super) fn for_each_candidate_pair(boxes: &[(DVec3, DVec3)], mut visit: impl FnMut(usize, usize)) {
+/// Every pair `(i, j)` (i < j) of overlapping boxes `(lo, hi)`, once, ordered by grid cell and then by
+/// index within the cell. A uniform grid of at most ~4n cells, sized from the boxes' mean extent; a pair
+/// found in several cells is kept only in the cell holding the low corner of the boxes' intersection.
+/// Cells are scanned in parallel; the order does not depend on the number of threads.
+pub(super) fn candidate_pairs(boxes: &[(DVec3, DVec3)]) -> Vec<(u32, u32)> {
     let n = boxes.len();
     if n < 2 {
-        return;
+        return Vec::new();
     }
     let glo = boxes.iter().fold(DVec3::INFINITY, |a, b| a.min(b.0));
     let ghi = boxes.iter().fold(DVec3::NEG_INFINITY, |a, b| a.max(b.1));
@@ -63,16 +65,21 @@ pub(super) fn for_each_candidate_pair(boxes: &[(DVec3, DVec3)], mut visit: impl 
             fill[c] += 1;
         });
     }
-    for c in 0..total {
-        let list = &members[start[c]..start[c + 1]];
-        for (k, &i) in list.iter().enumerate() {
-            let (ilo, ihi) = boxes[i as usize];
-            for &j in &list[k + 1..] {
-                let (jlo, jhi) = boxes[j as usize];
-                if ilo.cmple(jhi).all() && jlo.cmple(ihi).all() && flat(cell_of(ilo.max(jlo))) == c {
-                    visit(i as usize, j as usize);
+    (0..total)
+        .into_par_iter()
+        .flat_map_iter(|c| {
+            let list = &members[start[c]..start[c + 1]];
+            let mut pairs = Vec::new();
+            for (k, &i) in list.iter().enumerate() {
+                let (ilo, ihi) = boxes[i as usize];
+                for &j in &list[k + 1..] {
+                    let (jlo, jhi) = boxes[j as usize];
+                    if ilo.cmple(jhi).all() && jlo.cmple(ihi).all() && flat(cell_of(ilo.max(jlo))) == c {
+                        pairs.push((i, j));
+                    }
                 }
             }
-        }
-    }
+            pairs
+        })
+        .collect()
 }

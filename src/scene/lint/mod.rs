@@ -4,7 +4,8 @@
 //!
 //! Every check is a pure function of the surfaces, one per file. Candidate pairs come from a uniform
 //! grid over the faces' bounding boxes (`grid`, each pair visited once), so the cost grows with the
-//! number of nearby pairs, not with n². Geometry is evaluated in f64 (`polygon`). Lengths are compared
+//! number of nearby pairs, not with n²; pairs are examined in parallel (rayon) and their findings
+//! gathered in the pairs' order, so the report does not depend on the thread count. Geometry is evaluated in f64 (`polygon`). Lengths are compared
 //! with one absolute tolerance, `relative_tolerance` × the scene's bounding-box diagonal (never below
 //! the f32 spacing of the scene's coordinates): see [`LintOptions`]. This file holds the report's types
 //! and runs the checks; `report` prints it.
@@ -23,6 +24,7 @@ pub use polygon::Poly;
 
 use crate::scene::{SceneDescription, Surface};
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Settings of [`check_surfaces`].
@@ -218,32 +220,46 @@ pub fn check_surfaces(surfaces: &[Surface], options: &LintOptions) -> GeometryRe
             (p.lo - DVec3::splat(tolerance), p.hi + DVec3::splat(tolerance))
         })
         .collect();
-    let mut candidate_pairs = 0usize;
+    // Each pair is examined on its own (in parallel); the findings are gathered in the pairs' order,
+    // so the report is the same for any number of threads.
+    let pairs = grid::candidate_pairs(&boxes);
+    let candidate_pairs = pairs.len();
     let mut t_junctions = t_junctions::Collector::new(surfaces, &vertex_ids, tolerance);
+    let collector = &t_junctions;
+    let per_pair: Vec<PairFindings> = pairs
+        .par_iter()
+        .filter_map(|&(a, b)| {
+            let (i, j) = (live[a as usize], live[b as usize]);
+            let (pi, pj) = (polys[i].as_ref().expect("live"), polys[j].as_ref().expect("live"));
+            let t_junctions = collector.pair((i, pi), (j, pj));
+            let mut found = PairFindings { t_junctions, overlap: None, intersection: None };
+            if let Some(overlap) = overlaps::coplanar_overlap(pi, pj, tolerance) {
+                found.overlap = Some(CoplanarOverlap {
+                    a: SurfaceRef::of(surfaces, i),
+                    b: SurfaceRef::of(surfaces, j),
+                    same_facing: overlap.same_facing,
+                    overlap_area: overlap.area,
+                    point: to_f32(overlap.centroid),
+                });
+            } else if let Some((length, point)) = crossings::crossing(pi, pj, tolerance) {
+                found.intersection = Some(Intersection {
+                    a: SurfaceRef::of(surfaces, i),
+                    b: SurfaceRef::of(surfaces, j),
+                    length,
+                    point: to_f32(point),
+                });
+            }
+            let empty = found.t_junctions.is_empty() && found.overlap.is_none() && found.intersection.is_none();
+            (!empty).then_some(found)
+        })
+        .collect();
     let mut coplanar_overlaps: Vec<CoplanarOverlap> = Vec::new();
     let mut intersections: Vec<Intersection> = Vec::new();
-    grid::for_each_candidate_pair(&boxes, |a, b| {
-        candidate_pairs += 1;
-        let (i, j) = (live[a], live[b]);
-        let (pi, pj) = (polys[i].as_ref().expect("live"), polys[j].as_ref().expect("live"));
-        t_junctions.add_pair((i, pi), (j, pj));
-        if let Some(overlap) = overlaps::coplanar_overlap(pi, pj, tolerance) {
-            coplanar_overlaps.push(CoplanarOverlap {
-                a: SurfaceRef::of(surfaces, i),
-                b: SurfaceRef::of(surfaces, j),
-                same_facing: overlap.same_facing,
-                overlap_area: overlap.area,
-                point: to_f32(overlap.centroid),
-            });
-        } else if let Some((length, point)) = crossings::crossing(pi, pj, tolerance) {
-            intersections.push(Intersection {
-                a: SurfaceRef::of(surfaces, i),
-                b: SurfaceRef::of(surfaces, j),
-                length,
-                point: to_f32(point),
-            });
-        }
-    });
+    for found in per_pair {
+        t_junctions.extend(found.t_junctions);
+        coplanar_overlaps.extend(found.overlap);
+        intersections.extend(found.intersection);
+    }
     coplanar_overlaps.sort_by_key(|c| (c.a.index, c.b.index));
     intersections.sort_by_key(|x| (x.a.index, x.b.index));
 
@@ -259,6 +275,13 @@ pub fn check_surfaces(surfaces: &[Surface], options: &LintOptions) -> GeometryRe
         flipped: flipped::flipped_faces(surfaces, &polys, &vertex_ids, options.max_examples),
         non_planar: Findings::new(planarity::non_planar(surfaces, &polys, tolerance), options.max_examples),
     }
+}
+
+/// What one candidate pair showed.
+struct PairFindings {
+    t_junctions: Vec<t_junctions::Candidate>,
+    overlap: Option<CoplanarOverlap>,
+    intersection: Option<Intersection>,
 }
 
 fn to_f32(p: DVec3) -> [f32; 3] {

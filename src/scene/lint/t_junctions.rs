@@ -33,7 +33,7 @@ pub fn between(vertices: &[DVec3], polygon: &[DVec3], tolerance: f64) -> Vec<(us
 
 /// A T-junction found between one pair of faces, with the welded corner and edge it stands for (the
 /// same corner on the same geometric edge is found again from every face sharing either).
-struct Candidate {
+pub(super) struct Candidate {
     finding: TJunction,
     vertex: u32,
     edge: (u32, u32),
@@ -52,17 +52,25 @@ impl<'a> Collector<'a> {
         Collector { surfaces, vertex_ids, tolerance, found: Vec::new() }
     }
 
-    /// The corners of face `i` inside edges of face `j`, then the other way round.
-    pub(super) fn add_pair(&mut self, (i, pi): (usize, &Poly), (j, pj): (usize, &Poly)) {
-        self.add_one_way((i, pi), (j, pj));
-        self.add_one_way((j, pj), (i, pi));
+    /// The corners of face `i` inside edges of face `j`, then the other way round. Reads only, so
+    /// pairs can be examined in parallel and their candidates [`extend`](Self::extend)ed in order.
+    pub(super) fn pair(&self, (i, pi): (usize, &Poly), (j, pj): (usize, &Poly)) -> Vec<Candidate> {
+        let mut found = Vec::new();
+        self.one_way((i, pi), (j, pj), &mut found);
+        self.one_way((j, pj), (i, pi), &mut found);
+        found
     }
 
-    fn add_one_way(&mut self, (v_surface, vp): (usize, &Poly), (e_surface, ep): (usize, &Poly)) {
+    /// Adds the candidates of one pair.
+    pub(super) fn extend(&mut self, candidates: Vec<Candidate>) {
+        self.found.extend(candidates);
+    }
+
+    fn one_way(&self, (v_surface, vp): (usize, &Poly), (e_surface, ep): (usize, &Poly), found: &mut Vec<Candidate>) {
         let ids = self.vertex_ids;
         for (v, point, edge) in between(&vp.vertices, &ep.vertices, self.tolerance) {
             let n = ep.vertices.len();
-            self.found.push(Candidate {
+            found.push(Candidate {
                 finding: TJunction {
                     edge_surface: SurfaceRef::of(self.surfaces, e_surface),
                     vertex_surface: SurfaceRef::of(self.surfaces, v_surface),
