@@ -21,9 +21,11 @@
 
 pub mod maps;
 pub mod mtl;
+pub mod scene_textures;
 pub mod texture;
 
 pub use maps::{MapWarning, MaterialMaps, OpacityChannel};
+pub use scene_textures::SceneTextures;
 pub use texture::{ColorEncoding, Texture, TextureCache, TextureError};
 
 use crate::scene::Material;

@@ -60,29 +60,52 @@ impl<'a> Diffuse<'a> {
         hit.interpolate(&self.solution.vertex_exitance)
     }
 
-    /// Diffuse radiance towards the eye at a hit on element `element` of reflectance ρ, given its
-    /// exitance B(p) (`radiosity_at`), the direct irradiance E_direct from shadow rays (used by
-    /// `PixelDirect` only) and the caustic detail ΔB_c (reflected caustic light at pixel minus element
-    /// resolution):
+    /// Diffuse radiance towards the eye at a hit on element `element` of reflectance ρ (the texel
+    /// albedo ρ(x) on a textured surface), given its exitance B(p) (`radiosity_at`), the direct
+    /// irradiance E_direct from shadow rays (used by `PixelDirect` only), the caustic detail ΔB_c
+    /// (reflected caustic light at pixel minus element resolution) and, on a textured surface, the
+    /// texture ratio r = ρ(x)/ρ̄ₑ (`material::texture_ratio`) that scales the reflected radiosity:
     ///
-    /// Interpolated: L = max(B + ΔB_c, 0)/π;
-    /// PixelDirect: L = (E + max(B − E − B_direct + ΔB_c, 0))/π + ρ/π·E_direct.
+    /// Interpolated: L = max(B + ΔB_c, 0)/π, textured L = (E + r·max(B − E + ΔB_c, 0))/π;
+    /// PixelDirect: L = (E + r·max(B − E − B_direct + ΔB_c, 0))/π + ρ/π·E_direct (r = 1 untextured).
+    #[allow(clippy::too_many_arguments)]
     pub fn radiance(
         &self,
         hit: &SurfaceHit,
         element: usize,
         exitance: Vec3,
         reflectance: Vec3,
+        texture_ratio: Option<Vec3>,
         direct_irradiance: Vec3,
         caustic: Vec3,
     ) -> Vec3 {
-        match self.estimator {
-            DiffuseEstimator::Interpolated => (exitance + caustic).max(Vec3::ZERO) / PI,
-            DiffuseEstimator::PixelDirect => {
+        match (self.estimator, texture_ratio) {
+            (DiffuseEstimator::Interpolated, None) => (exitance + caustic).max(Vec3::ZERO) / PI,
+            (DiffuseEstimator::Interpolated, Some(ratio)) => {
+                let emission = self.mesh.elements.emission[element];
+                (emission + ratio * (exitance - emission + caustic).max(Vec3::ZERO)) / PI
+            }
+            (DiffuseEstimator::PixelDirect, ratio) => {
                 let emission = self.mesh.elements.emission[element];
                 let direct = hit.interpolate(&self.solution.vertex_direct_exitance);
                 let indirect = (exitance - emission - direct + caustic).max(Vec3::ZERO);
+                let indirect = match ratio {
+                    Some(r) => indirect * r,
+                    None => indirect,
+                };
                 (emission + indirect) / PI + reflectance / PI * direct_irradiance
+            }
+        }
+    }
+
+    /// The radiosity view of a hit (`TraceMode::Radiosity`): B(p)/π, textured (E + r·(B − E))/π with the
+    /// texture ratio r, so the view of pass one shows the texture too.
+    pub fn radiosity_radiance(&self, element: usize, exitance: Vec3, texture_ratio: Option<Vec3>) -> Vec3 {
+        match texture_ratio {
+            None => exitance / PI,
+            Some(ratio) => {
+                let emission = self.mesh.elements.emission[element];
+                (emission + ratio * (exitance - emission).max(Vec3::ZERO)) / PI
             }
         }
     }
