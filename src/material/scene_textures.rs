@@ -33,12 +33,10 @@ impl SceneTextures {
             warnings.extend(w);
             // What pass one depends on: which material reads which file, and the file's decoded texels
             // (so an edited texture, or a material pointed at another file, makes a saved solution stale).
-            for map in [&m.textures.diffuse, &m.textures.opacity, &m.textures.emission] {
-                if let Some(map) = map {
-                    h.write_u64(index as u64);
-                    h.write(map.path.to_string_lossy().as_bytes());
-                    h.write_f32s(map.factor.to_array());
-                }
+            for map in [&m.textures.diffuse, &m.textures.opacity, &m.textures.emission].into_iter().flatten() {
+                h.write_u64(index as u64);
+                h.write(map.path.to_string_lossy().as_bytes());
+                h.write_f32s(map.factor.to_array());
             }
             h.write_u64(resolved.content_digest());
             any |= resolved.is_textured();
