@@ -11,7 +11,6 @@ use super::caustics::CausticMap;
 use super::diffuse::{Diffuse, DiffuseEstimator};
 use crate::accel::Accel;
 use crate::film::Sampler;
-use crate::material::texture_ratio;
 use crate::mesh::Mesh;
 use crate::radiosity::Solution;
 use crate::scene::{Material, RenderParams, Surface};
@@ -170,19 +169,18 @@ impl<'a> Tracer<'a> {
         self
     }
 
-    /// Texture of the diffuse term at `hit` on `element`, reached after `distance` along the ray:
-    /// (texel albedo ρ(x), texture ratio ρ(x)/ρ̄ₑ), or `None` when the material has no `map_Kd` or the
-    /// surface no uv. The lookup is trilinear over a footprint of distance·pixel angle scene units,
+    /// Texel albedo ρ(x) of the diffuse term at `hit`, reached after `distance` along the ray, or
+    /// `None` when the material has no `map_Kd` or the surface no uv. (Pass two's texture ratio
+    /// ρ(x)/ρ̄ₑ is applied through the interpolated irradiance, see `Diffuse::radiance`.) The lookup is trilinear over a footprint of distance·pixel angle scene units,
     /// converted to uv units by the triangle's uv-per-length (`SurfaceHit::uv_per_length`).
-    fn texture_at(&self, hit: &SurfaceHit, element: usize, distance: f32) -> Option<(Vec3, Vec3)> {
+    fn texel_albedo_at(&self, hit: &SurfaceHit, distance: f32) -> Option<Vec3> {
         let mesh = self.mesh;
         let maps = mesh.textures.maps(hit.material).filter(|m| m.has_diffuse_texture())?;
         if !mesh.surface_has_uv.get(hit.surface as usize).copied().unwrap_or(false) {
             return None;
         }
         let footprint_uv = distance * self.pixel_angle_rad * hit.uv_per_length(mesh);
-        let albedo = maps.albedo_at(hit.uv, footprint_uv);
-        Some((albedo, texture_ratio(albedo, mesh.elements.reflectance[element])))
+        Some(maps.albedo_at(hit.uv, footprint_uv))
     }
 
     /// The closest hit along a ray that is not cut out: surfaces whose opacity map reads below ½ at
@@ -283,14 +281,13 @@ impl<'a> Tracer<'a> {
 
             if let Some(element) = hit.element.map(|e| e as usize) {
                 let exitance = self.diffuse.radiosity_at(&hit);
-                let texture = self.texture_at(&hit, element, distance);
-                let ratio = texture.map(|t| t.1);
+                let texel_albedo = self.texel_albedo_at(&hit, distance);
                 if mode == TraceMode::Radiosity {
-                    radiance += ray.throughput * self.diffuse.radiosity_radiance(element, exitance, ratio);
+                    radiance += ray.throughput * self.diffuse.radiosity_radiance(&hit, element, exitance, texel_albedo);
                     continue;
                 }
                 // The texel albedo on a textured surface, the element's reflectance otherwise.
-                let reflectance = texture.map_or(elements.reflectance[element], |t| t.0);
+                let reflectance = texel_albedo.unwrap_or(elements.reflectance[element]);
                 let highlight = match material.phong_exponent {
                     Some(n) if material.specular_reflectance.max_element() > 0.0 => {
                         Some((reflect(ray.dir, hit.shading_normal), n))
@@ -311,7 +308,15 @@ impl<'a> Tracer<'a> {
                     }
                     _ => Vec3::ZERO,
                 };
-                let diffuse = self.diffuse.radiance(&hit, element, exitance, reflectance, ratio, irradiance, caustic);
+                let diffuse = self.diffuse.radiance(
+                    &hit,
+                    element,
+                    exitance,
+                    reflectance,
+                    texel_albedo.is_some(),
+                    irradiance,
+                    caustic,
+                );
                 radiance += ray.throughput * diffuse;
                 if let Some((_, n)) = highlight {
                     // Normalised Phong lobe: f = Ks·(n + 2)/(2π)·cosⁿα.
