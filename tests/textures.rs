@@ -220,3 +220,26 @@ fn the_fingerprint_changes_with_the_texture_contents_and_path() {
     std::fs::write(dir.path().join("m.mtl"), mtl).expect("rewrite MTL");
     assert_ne!(edited, fingerprint_of(dir.path()), "texture path");
 }
+
+#[test]
+fn rays_pass_through_a_cut_out_and_stop_where_it_is_opaque() {
+    // map_d of 2×1 texels: transparent (0) for u < ½ (x < 0), opaque (255) for u > ½. Rays from below
+    // the one-sided floor, going up: through the cut-out they reach the lamp (radiance Ke = 1); where
+    // the floor is opaque they meet its back side, which is black.
+    let mask = png_bytes(2, 1, &[0, 255]);
+    let dir = write_scene("Kd 0.5 0.5 0.5\nmap_d m.png", &[("m.png", &mask)], 1.0, 1.0, 1.0, true);
+    let s = load(dir.path());
+    let progress = Progress::hidden();
+    let photons = RunPhotons::default();
+    let mut stats = RunStats::default();
+    let (mesh, solution) = run::pass_one(&s, None, &photons, &progress, &mut stats).expect("pass one");
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let tracer = Tracer::new(&mesh, &accel, &solution, &s.materials, &s.render).expect("tracer");
+    let mut sampler = Sampler::independent(1, 1);
+    let mut counts = RayCounts::default();
+    let mut up_from =
+        |x: f32| tracer.radiance(Vec3::new(x, 0.3, -0.5), Vec3::Z, TraceMode::Radiosity, &mut sampler, &mut counts);
+    // The lamp's radiance is its Ke exactly (E/π with E = π·Ke): f32 rounding only.
+    assert!((up_from(-0.5) - Vec3::ONE).abs().max_element() < 1e-5, "{}", up_from(-0.5));
+    assert_eq!(up_from(0.5), Vec3::ZERO);
+}
