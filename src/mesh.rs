@@ -4,9 +4,15 @@
 //!
 //! Hot per-element data is kept as a struct of arrays (`Elements`); each element is also split into
 //! one or two triangles for ray tracing (`Mesh::triangles`).
+//!
+//! Texture coordinates are interpolated like positions. An element of a `map_Kd` material reflects its
+//! mean albedo over its uv triangles in pass one (`Mesh::build_with_textures`).
 
+use crate::material::SceneTextures;
 use crate::scene::{Material, SceneDescription, Surface};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Marks "no index" in `u32` index arrays (the fourth corner of a triangle, a missing back side).
 pub const NONE: u32 = u32::MAX;
@@ -25,7 +31,8 @@ pub struct Elements {
     /// has its own surface index past the scene's surfaces: see `Mesh::surface_source`).
     pub surface: Vec<u32>,
     pub material: Vec<u32>,
-    /// Diffuse reflectance ρ (the material's `Kd`).
+    /// Diffuse reflectance ρ: the material's `Kd`, or with a `map_Kd` texture the element's mean albedo
+    /// ρ̄ₑ over its uv triangles.
     pub reflectance: Vec<Vec3>,
     /// Emitted exitance E = π·Ke.
     pub emission: Vec<Vec3>,
@@ -61,6 +68,8 @@ impl Elements {
 pub struct Mesh {
     /// Vertex positions, shared by the elements of one surface side.
     pub positions: Vec<Vec3>,
+    /// Texture coordinates, one per position ((0, 0) on surfaces without uv).
+    pub uvs: Vec<Vec2>,
     pub elements: Elements,
     /// Triangles for ray tracing: vertex indices, counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
@@ -72,6 +81,74 @@ pub struct Mesh {
     pub triangle_back_vertices: Vec<[u32; 3]>,
     /// For each mesh surface (scene surfaces, then back sides of two-sided ones): the scene surface.
     pub surface_source: Vec<u32>,
+    /// For each mesh surface: its scene surface has texture coordinates.
+    pub surface_has_uv: Vec<bool>,
+    /// The scene's loaded texture maps (empty for an untextured scene), shared with pass two.
+    pub textures: Arc<SceneTextures>,
+}
+
+/// Texture coordinates at point `p` of a planar triangle or convex quad with corner uvs: for a
+/// triangle uv = Σ bₖ uvₖ with p's barycentrics bₖ; for a quad the bilinear map
+/// p(s, t) = (1−s)(1−t)p₀ + s(1−t)p₁ + st·p₂ + (1−s)t·p₃ is inverted for (s, t) (a few Newton steps
+/// from the parallelogram guess) and uv(s, t) takes the same weights, so uv follows the mesher's grid.
+pub fn surface_uv(corners: &[Vec3], uvs: &[Vec2], p: Vec3) -> Vec2 {
+    if corners.len() == 3 {
+        let b = barycentric(corners[0], corners[1], corners[2], p);
+        return uvs[0] * b.x + uvs[1] * b.y + uvs[2] * b.z;
+    }
+    let q = corners;
+    let n = (q[2] - q[0]).cross(q[3] - q[1]);
+    let (mut s, mut t) = (0.5f32, 0.5f32);
+    for _ in 0..8 {
+        let f = q[0] * ((1.0 - s) * (1.0 - t)) + q[1] * (s * (1.0 - t)) + q[2] * (s * t) + q[3] * ((1.0 - s) * t) - p;
+        let ds = (q[1] - q[0]) * (1.0 - t) + (q[2] - q[3]) * t;
+        let dt = (q[3] - q[0]) * (1.0 - s) + (q[2] - q[1]) * s;
+        // Solve f + ds·Δs + dt·Δt = 0 in the plane (Cramer's rule with the normal n).
+        let det = ds.cross(dt).dot(n);
+        if det.abs() <= f32::MIN_POSITIVE {
+            break;
+        }
+        let delta_s = -f.cross(dt).dot(n) / det;
+        let delta_t = -ds.cross(f).dot(n) / det;
+        s += delta_s;
+        t += delta_t;
+        if delta_s.abs().max(delta_t.abs()) < 1e-7 {
+            break;
+        }
+    }
+    uvs[0] * ((1.0 - s) * (1.0 - t)) + uvs[1] * (s * (1.0 - t)) + uvs[2] * (s * t) + uvs[3] * ((1.0 - s) * t)
+}
+
+/// Barycentrics (b₀, b₁, b₂) of p in triangle (a, b, c): b₁ = ((p−a)×(c−a))·n/|n|², b₂ =
+/// ((b−a)×(p−a))·n/|n|², b₀ = 1 − b₁ − b₂, n = (b−a)×(c−a).
+fn barycentric(a: Vec3, b: Vec3, c: Vec3, p: Vec3) -> Vec3 {
+    let n = (b - a).cross(c - a);
+    let inv = 1.0 / n.length_squared();
+    let w1 = (p - a).cross(c - a).dot(n) * inv;
+    let w2 = (b - a).cross(p - a).dot(n) * inv;
+    Vec3::new(1.0 - w1 - w2, w1, w2)
+}
+
+/// Pass one's reflectance of element `e` of a textured material: its mean albedo
+/// ρ̄ₑ = Σ_△ A_△ ρ̄_△ / Σ_△ A_△ over the element's one or two triangles, ρ̄_△ the exact area average of
+/// min(Kd·t, ρ_max) over the triangle's uv image (`MaterialMaps::mean_albedo_over`; uv is affine on
+/// each triangle, so the uv-area average is the surface-area average). `None` when the element's
+/// material has no diffuse map or its surface has no uv (it keeps Kd).
+pub fn mean_element_albedo(mesh: &Mesh, textures: &SceneTextures, e: usize) -> Option<Vec3> {
+    let maps = textures.maps(mesh.elements.material[e]).filter(|m| m.has_diffuse_texture())?;
+    if !mesh.surface_has_uv.get(mesh.elements.surface[e] as usize).copied().unwrap_or(false) {
+        return None;
+    }
+    let c = mesh.elements.corners[e];
+    let fans: &[[usize; 3]] = if c[3] == NONE { &[[0, 1, 2]] } else { &[[0, 1, 2], [0, 2, 3]] };
+    let (mut sum, mut total) = (Vec3::ZERO, 0.0f32);
+    for f in fans {
+        let [a, b, d] = f.map(|k| c[k] as usize);
+        let area = 0.5 * (mesh.positions[b] - mesh.positions[a]).cross(mesh.positions[d] - mesh.positions[a]).length();
+        sum += maps.mean_albedo_over(mesh.uvs[a], mesh.uvs[b], mesh.uvs[d]) * area;
+        total += area;
+    }
+    (total > 0.0).then(|| sum / total)
 }
 
 /// Grid resolution needed so that no piece of an edge of length `len` exceeds `max_edge`.
@@ -109,6 +186,27 @@ pub fn count_surface_elements(surface: &Surface, max_element_edge: f32) -> u64 {
 impl Mesh {
     /// Cuts every surface of the scene into elements of at most `max_element_edge` (see module docs).
     pub fn build(scene: &SceneDescription, max_element_edge: f32) -> Mesh {
+        Mesh::build_with_textures(scene, max_element_edge, Arc::new(SceneTextures::default()))
+    }
+
+    /// `build`, then the reflectance of every element of a textured material on a surface with uv is
+    /// its mean albedo ρ̄ₑ (`mean_element_albedo`); the textures stay with the mesh for pass two.
+    pub fn build_with_textures(scene: &SceneDescription, max_element_edge: f32, textures: Arc<SceneTextures>) -> Mesh {
+        let mut mesh = Mesh::build_geometry(scene, max_element_edge);
+        if textures.is_textured() {
+            let albedo: Vec<Option<Vec3>> =
+                (0..mesh.elements.len()).into_par_iter().map(|e| mean_element_albedo(&mesh, &textures, e)).collect();
+            for (e, a) in albedo.into_iter().enumerate() {
+                if let Some(a) = a {
+                    mesh.elements.reflectance[e] = a;
+                }
+            }
+        }
+        mesh.textures = textures;
+        mesh
+    }
+
+    fn build_geometry(scene: &SceneDescription, max_element_edge: f32) -> Mesh {
         let mut mesh = Mesh::default();
         // Two-sided surfaces with the ranges of elements and triangles their front side produced
         // (one surface's pieces are contiguous), so mirroring them is linear in the mesh size.
@@ -116,8 +214,11 @@ impl Mesh {
         for (s, surface) in scene.surfaces.iter().enumerate() {
             let material = &scene.materials[surface.material as usize];
             let (first_element, first_triangle) = (mesh.elements.len(), mesh.triangles.len());
+            let first_vertex = mesh.positions.len();
             mesh.add_surface(&surface.vertices, s as u32, surface.material, material, max_element_edge);
+            mesh.interpolate_uvs(first_vertex, surface);
             mesh.surface_source.push(s as u32);
+            mesh.surface_has_uv.push(surface.uvs.is_some());
             if surface.two_sided {
                 back_sides.push((s, first_element..mesh.elements.len(), first_triangle..mesh.triangles.len()));
             }
@@ -128,9 +229,27 @@ impl Mesh {
             let material = &scene.materials[surface.material as usize];
             let mesh_surface = mesh.surface_source.len() as u32;
             mesh.surface_source.push(s as u32);
+            mesh.surface_has_uv.push(surface.uvs.is_some());
             mesh.add_back_side(front, front_triangles, mesh_surface, surface.material, material);
         }
         mesh
+    }
+
+    /// Texture coordinates of the vertices `first_vertex..` that `add_surface` just made of `surface`:
+    /// the surface's uv at the same bilinear (quad) or barycentric (triangle) weights as each position,
+    /// recovered from the position itself; (0, 0) without uv.
+    fn interpolate_uvs(&mut self, first_vertex: usize, surface: &Surface) {
+        let uvs = match &surface.uvs {
+            Some(uvs) if uvs.len() == surface.vertices.len() => uvs,
+            _ => {
+                self.uvs.resize(self.positions.len(), Vec2::ZERO);
+                return;
+            }
+        };
+        for k in first_vertex..self.positions.len() {
+            let uv = surface_uv(&surface.vertices, uvs, self.positions[k]);
+            self.uvs.push(uv);
+        }
     }
 
     fn add_surface(&mut self, polygon: &[Vec3], surface: u32, material_index: u32, material: &Material, max_edge: f32) {
@@ -223,6 +342,7 @@ impl Mesh {
                 let v = c[n - 1 - k];
                 back[k] = *remap.entry(v).or_insert_with(|| {
                     self.positions.push(self.positions[v as usize]);
+                    self.uvs.push(self.uvs[v as usize]);
                     self.positions.len() as u32 - 1
                 });
             }

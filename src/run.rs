@@ -13,6 +13,7 @@ use anyhow::Context;
 use crate::accel::Accel;
 use crate::compare::CompareError;
 use crate::film::{self, Image};
+use crate::material::SceneTextures;
 use crate::mesh::{self, Mesh};
 use crate::output::{self, OutputError, ToneCurve};
 use crate::progress::Progress;
@@ -252,7 +253,9 @@ pub fn load_scene(path: &Path, overrides: &Overrides, progress: &Progress) -> Re
     Ok(scene)
 }
 
-/// Meshes the scene after checking that the element count is sane.
+/// Meshes the scene after checking that the element count is sane. The scene's texture maps are
+/// loaded here, once per run (a map that cannot be read is a warning naming the file, and its
+/// material keeps Kd); the mesh carries them to pass two.
 pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh, MeshError> {
     let edge = scene.radiosity.max_element_edge;
     let count = mesh::count_elements(scene, edge);
@@ -265,7 +268,11 @@ pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh,
         });
     }
     let stage = progress.stage("meshing", scene.surfaces.len() as u64, "surfaces");
-    let mesh = Mesh::build(scene, edge);
+    let (textures, warnings) = SceneTextures::load(&scene.materials);
+    for w in &warnings {
+        progress.note(&format!("warning: {w}"));
+    }
+    let mesh = Mesh::build_with_textures(scene, edge, Arc::new(textures));
     stage.finish(&format!(
         "{} surfaces → {} elements, {} triangles",
         scene.surfaces.len(),
@@ -370,8 +377,10 @@ pub fn render(
 ) -> Result<Image, TraceError> {
     let image = &scene.image;
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
-    let tracer =
-        Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?.with_shading_normals(&scene.surfaces);
+    let pixel_angle_rad = scene.camera.vfov_deg.to_radians() / image.height_px.max(1) as f32;
+    let tracer = Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?
+        .with_shading_normals(&scene.surfaces)
+        .with_pixel_angle(pixel_angle_rad);
     let caustics = match mode {
         TraceMode::Final => photons.get(mesh, accel, &scene.materials, &scene.surfaces),
         TraceMode::Radiosity => None,

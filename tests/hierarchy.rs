@@ -46,6 +46,7 @@ fn scene_of(surfaces: Vec<(Vec<Vec3>, f32, f32)>) -> SceneDescription {
             material: i as u32,
             two_sided: false,
             shading_normals: None,
+            uvs: None,
             object: "test".into(),
             source: SourceLoc::default(),
         });

@@ -84,6 +84,18 @@ impl MaterialMaps {
         (maps, warnings)
     }
 
+    /// FNV-1a 64 over the decoded level-0 texels of every loaded map (0 for none).
+    pub fn content_digest(&self) -> u64 {
+        let mut h = crate::radiosity::fingerprint::Fnv1a64::default();
+        let textures = [self.diffuse.as_ref(), self.opacity.as_ref().map(|o| &o.0), self.emission.as_ref()];
+        for t in textures.into_iter().flatten() {
+            let level = &t.levels[0];
+            h.write_u64(((level.width_px as u64) << 32) | level.height_px as u64);
+            h.write_f32s(level.texels.iter().flat_map(|x| x.to_array()));
+        }
+        h.finish()
+    }
+
     /// True when any map is in use (untextured materials need no uv).
     pub fn is_textured(&self) -> bool {
         self.diffuse.is_some() || self.opacity.is_some() || self.emission.is_some()

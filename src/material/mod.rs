@@ -13,17 +13,20 @@
 //!     L = E/π + (B − E)/π · ρ(x)/ρ̄ₑ, since B − E = ρ̄ₑ·H and the irradiance H varies slowly;
 //!   - with per-pixel direct light, the direct term is ρ(x)/π · E_direct(x) and only the indirect
 //!     radiosity is scaled by the ratio.
-//! - Cut-outs (`map_d`, or the alpha of `map_Kd`) let rays pass where opacity < ½ in both passes;
-//!   `map_Ke` multiplies `Ke` per texel.
+//! - Cut-outs (`map_d`, or the alpha of `map_Kd`) let pass two's camera and specular rays pass where
+//!   opacity < ½; pass one (hemicubes) and shadow rays still see the whole triangle.
+//! - `map_Ke` multiplies `Ke` per texel in `MaterialMaps::emission_at`; the passes do not use it yet.
 //!
 //! A missing or unreadable texture file is a warning naming the file (`MapWarning`), and the material
 //! keeps its constant (`Kd`, `Ke`, opaque).
 
 pub mod maps;
 pub mod mtl;
+pub mod scene_textures;
 pub mod texture;
 
 pub use maps::{MapWarning, MaterialMaps, OpacityChannel};
+pub use scene_textures::SceneTextures;
 pub use texture::{ColorEncoding, Texture, TextureCache, TextureError};
 
 use crate::scene::Material;

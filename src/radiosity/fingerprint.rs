@@ -47,7 +47,8 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
 /// Identifies the scene a solution belongs to: FNV-1a 64 over the vertex and element counts, the
 /// vertex positions, the element corners, reflectances and emissions, and every element's specular
 /// material (`hash_specular_materials`), in little-endian bit patterns so the value is the same on
-/// every platform. Any change of geometry, meshing or material (Kd, Ke, and Ks/Ni/d, which steer the
+/// every platform; with textures also the texture digest (`SceneTextures::digest`) and the vertex uvs.
+/// Any change of geometry, meshing or material (Kd, Ke, and Ks/Ni/d, which steer the
 /// extended form factors through mirrors and glass) changes it.
 pub fn fingerprint(mesh: &Mesh, materials: &[Material]) -> u64 {
     let e = &mesh.elements;
@@ -63,6 +64,13 @@ pub fn fingerprint(mesh: &Mesh, materials: &[Material]) -> u64 {
     h.write_f32s(e.reflectance.iter().flat_map(|r| r.to_array()));
     h.write_f32s(e.emission.iter().flat_map(|r| r.to_array()));
     hash_specular_materials(&mut h, mesh, materials);
+    // Textures: which files, their decoded texels and the uv they are read at (pass one reads their
+    // element means, pass two the texels). Untextured meshes hash nothing more, so their
+    // fingerprints are those of radray before textures.
+    if mesh.textures.is_textured() {
+        h.write_u64(mesh.textures.digest());
+        h.write_f32s(mesh.uvs.iter().flat_map(|uv| uv.to_array()));
+    }
     h.finish()
 }
 

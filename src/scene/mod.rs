@@ -9,7 +9,7 @@ pub mod parse;
 pub mod shapes;
 pub mod validate;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
 pub use overrides::Overrides;
@@ -272,6 +272,9 @@ pub struct Surface {
     pub two_sided: bool,
     /// Smooth-shading normals at the vertices (from the OBJ), for the specular term only.
     pub shading_normals: Option<Vec<Vec3>>,
+    /// Texture coordinates at the vertices (OBJ `vt`), when the face has them; inline primitives
+    /// have none.
+    pub uvs: Option<Vec<Vec2>>,
     /// Name of the object or primitive the surface belongs to.
     pub object: String,
     pub source: SourceLoc,

@@ -5,7 +5,7 @@
 
 use super::{Material, SourceLoc, Surface};
 use crate::material::mtl::{self, MtlError};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 
@@ -140,6 +140,8 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
         out.warnings.extend(library.warnings);
     }
     let mut default_material = None;
+    // Faces of a textured material that lack `vt`: one warning per file.
+    let mut untextured_faces = 0usize;
     let loc = SourceLoc { path: path.to_path_buf(), line: 0 };
     for model in &models {
         let mesh = &model.mesh;
@@ -172,6 +174,13 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
                 )
             })
         };
+        // With `single_index`, tobj keeps one (v, vt, vn) tuple per mesh vertex but appends a texcoord
+        // only where the face names one: the texcoords line up with the vertices only when every
+        // face of the object has `vt`. Otherwise the object is read without uv.
+        let vertex_count = mesh.positions.len() / 3;
+        let has_uv = vertex_count > 0 && mesh.texcoords.len() == 2 * vertex_count;
+        let uv = |i: u32| Vec2::new(mesh.texcoords[2 * i as usize], mesh.texcoords[2 * i as usize + 1]);
+        let textured = out.materials.get(material as usize).is_some_and(|m| m.textures.diffuse.is_some());
         let arities: Vec<u32> =
             if mesh.face_arities.is_empty() { vec![3; mesh.indices.len() / 3] } else { mesh.face_arities.clone() };
         let mut start = 0usize;
@@ -180,15 +189,27 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
             start += arity as usize;
             let vertices: Vec<Vec3> = idx.iter().map(|&i| position(i)).collect();
             let normals: Option<Vec<Vec3>> = idx.iter().map(|&i| normal(i)).collect();
+            let uvs = has_uv.then(|| idx.iter().map(|&i| uv(i)).collect::<Vec<Vec2>>());
+            if textured && uvs.is_none() {
+                untextured_faces += 1;
+            }
             out.surfaces.push(Surface {
                 vertices,
                 material,
                 two_sided,
                 shading_normals: normals,
+                uvs,
                 object: model.name.clone(),
                 source: loc.clone(),
             });
         }
+    }
+    if untextured_faces > 0 {
+        out.warnings.push(format!(
+            "{}: {untextured_faces} face(s) of textured materials have no texture coordinates (`vt` on every face \
+             of the object); they use their Kd",
+            path.display()
+        ));
     }
     Ok(out)
 }

@@ -385,7 +385,7 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
 }
 
 fn surface(vertices: Vec<Vec3>, material: u32, two_sided: bool, name: &str, source: SourceLoc) -> Surface {
-    Surface { vertices, material, two_sided, shading_normals: None, object: name.to_string(), source }
+    Surface { vertices, material, two_sided, shading_normals: None, uvs: None, object: name.to_string(), source }
 }
 
 fn camera(loc: &Locator, c: &S<RawCamera>) -> Result<Camera, SceneError> {

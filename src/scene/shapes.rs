@@ -72,7 +72,8 @@ pub(super) fn normalise_surfaces(surfaces: Vec<Surface>) -> (Vec<Surface>, usize
                 continue;
             }
             let normals = s.shading_normals.as_ref().map(|n| vec![n[0], n[k], n[k + 1]]);
-            out.push(Surface { vertices: tri, shading_normals: normals, ..s.clone() });
+            let uvs = s.uvs.as_ref().map(|t| vec![t[0], t[k], t[k + 1]]);
+            out.push(Surface { vertices: tri, shading_normals: normals, uvs, ..s.clone() });
         }
     }
     (out, degenerate)

@@ -37,12 +37,38 @@ pub struct Diffuse<'a> {
     mesh: &'a Mesh,
     solution: &'a Solution,
     estimator: DiffuseEstimator,
+    /// For textured scenes: per-vertex irradiance (total, direct) from `vertex_irradiance`; empty
+    /// otherwise.
+    vertex_irradiance: Vec<Vec3>,
+    vertex_direct_irradiance: Vec<Vec3>,
+}
+
+/// Per-vertex irradiance of a solution: H_v = Σₑ Aₑ Hₑ / Σₑ Aₑ over the elements sharing v (as
+/// `Mesh::vertex_average`), with Hₑ = (Bₑ − Eₑ)/ρₑ the irradiance element e reflected in pass one
+/// (0 where ρₑ = 0), and the same for the direct part Hₑ,d = Bₑ,d/ρₑ. On a textured surface the
+/// elements' mean albedos differ, so interpolating B and dividing by one element's ρ̄ₑ would carry the
+/// neighbours' albedo into it; irradiance is smooth across them.
+pub fn vertex_irradiance(mesh: &Mesh, solution: &Solution) -> (Vec<Vec3>, Vec<Vec3>) {
+    let e = &mesh.elements;
+    let per_albedo = |value: Vec3, rho: Vec3| {
+        let f = |v: f32, r: f32| if r > 0.0 { v / r } else { 0.0 };
+        Vec3::new(f(value.x, rho.x), f(value.y, rho.y), f(value.z, rho.z))
+    };
+    let total: Vec<glam::DVec3> = (0..e.len())
+        .map(|i| per_albedo(solution.element_exitance[i] - e.emission[i], e.reflectance[i]).as_dvec3())
+        .collect();
+    let direct: Vec<glam::DVec3> =
+        (0..e.len()).map(|i| per_albedo(solution.element_direct_exitance[i], e.reflectance[i]).as_dvec3()).collect();
+    let to_f32 = |v: Vec<glam::DVec3>| v.into_iter().map(|x| x.as_vec3()).collect();
+    (to_f32(mesh.vertex_average(&total)), to_f32(mesh.vertex_average(&direct)))
 }
 
 impl<'a> Diffuse<'a> {
     /// `solution` must hold one vertex value per mesh vertex (checked by `Tracer::new`).
     pub fn new(mesh: &'a Mesh, solution: &'a Solution, estimator: DiffuseEstimator) -> Diffuse<'a> {
-        Diffuse { mesh, solution, estimator }
+        let (vertex_irradiance, vertex_direct_irradiance) =
+            if mesh.textures.is_textured() { vertex_irradiance(mesh, solution) } else { (Vec::new(), Vec::new()) };
+        Diffuse { mesh, solution, estimator, vertex_irradiance, vertex_direct_irradiance }
     }
 
     pub fn estimator(&self) -> DiffuseEstimator {
@@ -60,30 +86,70 @@ impl<'a> Diffuse<'a> {
         hit.interpolate(&self.solution.vertex_exitance)
     }
 
-    /// Diffuse radiance towards the eye at a hit on element `element` of reflectance ρ, given its
-    /// exitance B(p) (`radiosity_at`), the direct irradiance E_direct from shadow rays (used by
-    /// `PixelDirect` only) and the caustic detail ΔB_c (reflected caustic light at pixel minus element
-    /// resolution):
+    /// Diffuse radiance towards the eye at a hit on element `element` of reflectance ρ (the texel
+    /// albedo ρ(x) on a textured surface), given its exitance B(p) (`radiosity_at`), the direct
+    /// irradiance E_direct from shadow rays (used by `PixelDirect` only), the caustic detail ΔB_c
+    /// (reflected caustic light at pixel minus element resolution, already × ρ) and whether the
+    /// surface is textured. Untextured:
     ///
     /// Interpolated: L = max(B + ΔB_c, 0)/π;
     /// PixelDirect: L = (E + max(B − E − B_direct + ΔB_c, 0))/π + ρ/π·E_direct.
+    ///
+    /// Textured, the classic texture ratio ρ(x)/ρ̄ₑ applied to the reflected radiosity B − E = ρ̄ₑ·H,
+    /// with the irradiance H(p) interpolated from `vertex_irradiance` (so neighbours' albedos do not
+    /// leak in): L = (E + max(ρ(x)·H(p) + ΔB_c, 0))/π, and with per-pixel direct light
+    /// L = (E + max(ρ(x)·(H − H_direct)(p) + ΔB_c, 0))/π + ρ(x)/π·E_direct.
+    #[allow(clippy::too_many_arguments)]
     pub fn radiance(
         &self,
         hit: &SurfaceHit,
         element: usize,
         exitance: Vec3,
         reflectance: Vec3,
+        textured: bool,
         direct_irradiance: Vec3,
         caustic: Vec3,
     ) -> Vec3 {
-        match self.estimator {
-            DiffuseEstimator::Interpolated => (exitance + caustic).max(Vec3::ZERO) / PI,
-            DiffuseEstimator::PixelDirect => {
+        let textured = textured && !self.vertex_irradiance.is_empty();
+        match (self.estimator, textured) {
+            (DiffuseEstimator::Interpolated, false) => (exitance + caustic).max(Vec3::ZERO) / PI,
+            (DiffuseEstimator::Interpolated, true) => {
+                let emission = self.mesh.elements.emission[element];
+                let irradiance = hit.interpolate(&self.vertex_irradiance);
+                (emission + (reflectance * irradiance + caustic).max(Vec3::ZERO)) / PI
+            }
+            (DiffuseEstimator::PixelDirect, false) => {
                 let emission = self.mesh.elements.emission[element];
                 let direct = hit.interpolate(&self.solution.vertex_direct_exitance);
                 let indirect = (exitance - emission - direct + caustic).max(Vec3::ZERO);
                 (emission + indirect) / PI + reflectance / PI * direct_irradiance
             }
+            (DiffuseEstimator::PixelDirect, true) => {
+                let emission = self.mesh.elements.emission[element];
+                let irradiance =
+                    hit.interpolate(&self.vertex_irradiance) - hit.interpolate(&self.vertex_direct_irradiance);
+                let indirect = (reflectance * irradiance + caustic).max(Vec3::ZERO);
+                (emission + indirect) / PI + reflectance / PI * direct_irradiance
+            }
+        }
+    }
+
+    /// The radiosity view of a hit (`TraceMode::Radiosity`) on a surface of albedo ρ(x): B(p)/π, and on
+    /// a textured surface (E + ρ(x)·H(p))/π with the interpolated irradiance H (see `radiance`), so
+    /// the view of pass one shows the texture too.
+    pub fn radiosity_radiance(
+        &self,
+        hit: &SurfaceHit,
+        element: usize,
+        exitance: Vec3,
+        texel_albedo: Option<Vec3>,
+    ) -> Vec3 {
+        match texel_albedo {
+            Some(rho) if !self.vertex_irradiance.is_empty() => {
+                let emission = self.mesh.elements.emission[element];
+                (emission + (rho * hit.interpolate(&self.vertex_irradiance)).max(Vec3::ZERO)) / PI
+            }
+            _ => exitance / PI,
         }
     }
 }

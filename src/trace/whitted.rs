@@ -101,7 +101,12 @@ pub struct Tracer<'a> {
     caustics: Option<CausticMap>,
     /// The scene's size, which the caustic kernel is relative to.
     scale: f32,
+    /// Angle one pixel subtends at the camera (radians), for texture footprints (`with_pixel_angle`).
+    pixel_angle_rad: f32,
 }
+
+/// Most cut-out surfaces (opacity < ½) one ray passes through before it is stopped.
+const MAX_CUTOUT_CROSSINGS: u32 = 64;
 
 impl<'a> Tracer<'a> {
     pub fn new(
@@ -144,6 +149,7 @@ impl<'a> Tracer<'a> {
             surfaces: None,
             caustics: None,
             scale,
+            pixel_angle_rad: 0.0,
         })
     }
 
@@ -153,6 +159,55 @@ impl<'a> Tracer<'a> {
     pub fn with_shading_normals(mut self, surfaces: &'a [Surface]) -> Self {
         self.surfaces = Some(surfaces);
         self
+    }
+
+    /// Sets the angle a pixel subtends (vfov / height for a pinhole camera), from which texture lookups
+    /// choose their mip level: a hit at distance t sees a footprint of t·angle scene units. Without it
+    /// textures are read at full resolution.
+    pub fn with_pixel_angle(mut self, pixel_angle_rad: f32) -> Self {
+        self.pixel_angle_rad = if pixel_angle_rad.is_finite() { pixel_angle_rad.max(0.0) } else { 0.0 };
+        self
+    }
+
+    /// Texel albedo ρ(x) of the diffuse term at `hit`, reached after `distance` along the ray, or
+    /// `None` when the material has no `map_Kd` or the surface no uv. (Pass two's texture ratio
+    /// ρ(x)/ρ̄ₑ is applied through the interpolated irradiance, see `Diffuse::radiance`.) The lookup is trilinear over a footprint of distance·pixel angle scene units,
+    /// converted to uv units by the triangle's uv-per-length (`SurfaceHit::uv_per_length`).
+    fn texel_albedo_at(&self, hit: &SurfaceHit, distance: f32) -> Option<Vec3> {
+        let mesh = self.mesh;
+        let maps = mesh.textures.maps(hit.material).filter(|m| m.has_diffuse_texture())?;
+        if !mesh.surface_has_uv.get(hit.surface as usize).copied().unwrap_or(false) {
+            return None;
+        }
+        let footprint_uv = distance * self.pixel_angle_rad * hit.uv_per_length(mesh);
+        Some(maps.albedo_at(hit.uv, footprint_uv))
+    }
+
+    /// The closest hit along a ray that is not cut out: surfaces whose opacity map reads below ½ at
+    /// the hit are passed through (at most `MAX_CUTOUT_CROSSINGS` of them). Returns the hit and the
+    /// distance from `origin`.
+    fn closest_opaque_hit(&self, origin: Vec3, dir: Vec3) -> Option<(SurfaceHit, f32)> {
+        let mesh = self.mesh;
+        let mut from = origin;
+        let mut travelled = 0.0f32;
+        for _ in 0..=MAX_CUTOUT_CROSSINGS {
+            let hit = self.accel.closest_hit(from, dir, 0.0, f32::INFINITY)?;
+            let surface_hit = SurfaceHit::new(mesh, &hit, dir);
+            let distance = travelled + hit.t;
+            let cut = match mesh.textures.maps(surface_hit.material).filter(|m| m.has_opacity()) {
+                Some(maps) if mesh.surface_has_uv.get(surface_hit.surface as usize).copied().unwrap_or(false) => {
+                    let footprint_uv = distance * self.pixel_angle_rad * surface_hit.uv_per_length(mesh);
+                    maps.opacity_at(surface_hit.uv, footprint_uv) < 0.5
+                }
+                _ => false,
+            };
+            if !cut {
+                return Some((surface_hit, distance));
+            }
+            from = surface_hit.position + dir * self.offset;
+            travelled = distance + self.offset;
+        }
+        None
     }
 
     /// Builds a caustic map from the run's `photons` (`transport::photons`, the ones pass one's
@@ -212,10 +267,9 @@ impl<'a> Tracer<'a> {
             } else {
                 counts.secondary += 1;
             }
-            let Some(hit) = self.accel.closest_hit(ray.origin, ray.dir, 0.0, f32::INFINITY) else {
+            let Some((hit, distance)) = self.closest_opaque_hit(ray.origin, ray.dir) else {
                 continue;
             };
-            let hit = SurfaceHit::new(mesh, &hit, ray.dir);
             let material = &self.materials[hit.material as usize];
             // The normal that bends specular rays (the geometric one unless smooth shading applies).
             let hit = if mode == TraceMode::Final && material.is_specular() {
@@ -227,11 +281,13 @@ impl<'a> Tracer<'a> {
 
             if let Some(element) = hit.element.map(|e| e as usize) {
                 let exitance = self.diffuse.radiosity_at(&hit);
+                let texel_albedo = self.texel_albedo_at(&hit, distance);
                 if mode == TraceMode::Radiosity {
-                    radiance += ray.throughput * exitance / PI;
+                    radiance += ray.throughput * self.diffuse.radiosity_radiance(&hit, element, exitance, texel_albedo);
                     continue;
                 }
-                let reflectance = elements.reflectance[element];
+                // The texel albedo on a textured surface, the element's reflectance otherwise.
+                let reflectance = texel_albedo.unwrap_or(elements.reflectance[element]);
                 let highlight = match material.phong_exponent {
                     Some(n) if material.specular_reflectance.max_element() > 0.0 => {
                         Some((reflect(ray.dir, hit.shading_normal), n))
@@ -252,7 +308,15 @@ impl<'a> Tracer<'a> {
                     }
                     _ => Vec3::ZERO,
                 };
-                let diffuse = self.diffuse.radiance(&hit, element, exitance, reflectance, irradiance, caustic);
+                let diffuse = self.diffuse.radiance(
+                    &hit,
+                    element,
+                    exitance,
+                    reflectance,
+                    texel_albedo.is_some(),
+                    irradiance,
+                    caustic,
+                );
                 radiance += ray.throughput * diffuse;
                 if let Some((_, n)) = highlight {
                     // Normalised Phong lobe: f = Ks·(n + 2)/(2π)·cosⁿα.

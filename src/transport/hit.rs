@@ -56,8 +56,8 @@ pub struct SurfaceHit {
     pub vertices: [u32; 3],
     /// Barycentrics (b₀, b₁, b₂) of `position` on the triangle.
     pub bary: [f32; 3],
-    /// Texture coordinates at the hit. The mesh carries none yet, so this is (0, 0) until textures
-    /// are read from the scene.
+    /// Texture coordinates at the hit, uv = Σ_k b_k uv(v_k) over the triangle ((0, 0) on surfaces
+    /// without uv).
     pub uv: Vec2,
     /// Material index (`Elements::material` of `front_element`).
     pub material: u32,
@@ -84,6 +84,11 @@ impl SurfaceHit {
         let position = mesh.positions[i0 as usize] * bary[0]
             + mesh.positions[i1 as usize] * bary[1]
             + mesh.positions[i2 as usize] * bary[2];
+        let uv = if mesh.uvs.len() == mesh.positions.len() {
+            mesh.uvs[i0 as usize] * bary[0] + mesh.uvs[i1 as usize] * bary[1] + mesh.uvs[i2 as usize] * bary[2]
+        } else {
+            Vec2::ZERO
+        };
         let facing = if front { normal } else { -normal };
         SurfaceHit {
             position,
@@ -96,7 +101,7 @@ impl SurfaceHit {
             surface: elements.surface[element.unwrap_or(front_element) as usize],
             vertices,
             bary,
-            uv: Vec2::ZERO,
+            uv,
             material: elements.material[front_element as usize],
         }
     }
@@ -115,6 +120,24 @@ impl SurfaceHit {
             );
         }
         self
+    }
+
+    /// How many uv units one unit of length on the hit triangle spans: √(A_uv / A_world), with A_uv and
+    /// A_world the triangle's areas in uv and in space (0 for a triangle without uv extent). A pixel
+    /// footprint of w scene units is w times this in uv units.
+    pub fn uv_per_length(&self, mesh: &Mesh) -> f32 {
+        let [i0, i1, i2] = mesh.triangles[self.triangle as usize].map(|i| i as usize);
+        if mesh.uvs.len() != mesh.positions.len() {
+            return 0.0;
+        }
+        let (p, t) = (&mesh.positions, &mesh.uvs);
+        let world = (p[i1] - p[i0]).cross(p[i2] - p[i0]).length();
+        let uv = (t[i1] - t[i0]).perp_dot(t[i2] - t[i0]).abs();
+        if world > 0.0 && uv.is_finite() {
+            (uv / world).sqrt()
+        } else {
+            0.0
+        }
     }
 
     /// Origin of a ray leaving on the side the ray arrived from: p + offset·n_g.

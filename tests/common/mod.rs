@@ -28,6 +28,7 @@ pub fn surface(vertices: impl Into<Vec<Vec3>>, material: u32, two_sided: bool) -
         material,
         two_sided,
         shading_normals: None,
+        uvs: None,
         object: String::new(),
         source: SourceLoc::default(),
     }

@@ -30,6 +30,7 @@ pub fn room_with_objects(target_triangles: usize) -> SceneDescription {
             material,
             two_sided: false,
             shading_normals: None,
+            uvs: None,
             object: "procedural".into(),
             source: SourceLoc::default(),
         })

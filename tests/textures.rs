@@ -1,0 +1,245 @@
+//! `map_Kd` textures end to end: OBJ `vt` → mesh uv → pass one's element mean albedo → pass two's
+//! texture ratio, with the fallbacks (missing file, face without `vt`) and the fingerprint.
+
+mod common;
+
+use glam::{Vec2, Vec3};
+use radray::accel::Accel;
+use radray::film::Sampler;
+use radray::material::texture::srgb_to_linear;
+use radray::material::{SceneTextures, ALBEDO_CEILING};
+use radray::mesh::Mesh;
+use radray::progress::Progress;
+use radray::radiosity::fingerprint::fingerprint;
+use radray::run::{self, RunStats};
+use radray::scene;
+use radray::trace::{RayCounts, TraceMode, Tracer};
+use radray::transport::photons::RunPhotons;
+use std::f64::consts::PI;
+use std::path::Path;
+use std::sync::Arc;
+
+fn png_bytes(width: u32, height: u32, grey: &[u8]) -> Vec<u8> {
+    let image = image::GrayImage::from_raw(width, height, grey.to_vec()).expect("size matches");
+    let mut bytes = Vec::new();
+    image.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).expect("encode PNG");
+    bytes
+}
+
+/// A floor quad [−1, 1]² at z = 0 facing +z, uv over the unit square (u along x, v along y), material
+/// `floor`; above it at height `lamp_height` a lamp quad [−a, a]² facing down (Ke 1, Kd 0). Written to
+/// a temporary folder with `mtl_floor` (the floor material's statements) and `files`.
+fn write_scene(
+    mtl_floor: &str,
+    files: &[(&str, &[u8])],
+    lamp_half: f32,
+    lamp_height: f32,
+    edge: f32,
+    floor_vt: bool,
+) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (a, h) = (lamp_half, lamp_height);
+    let floor = if floor_vt { "f 1/1 2/2 3/3 4/4" } else { "f 1 2 3 4" };
+    let obj = format!(
+        "mtllib m.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv {a} -{a} {h}\nv -{a} -{a} {h}\nv -{a} {a} {h}\n\
+         v {a} {a} {h}\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl floor\n{floor}\nusemtl lamp\nf 5 6 7 8\n"
+    );
+    std::fs::write(dir.path().join("m.obj"), obj).expect("write OBJ");
+    let mtl = format!("newmtl lamp\nKd 0 0 0\nKe 1 1 1\n\nnewmtl floor\n{mtl_floor}\n");
+    std::fs::write(dir.path().join("m.mtl"), mtl).expect("write MTL");
+    for (name, bytes) in files {
+        std::fs::write(dir.path().join(name), bytes).expect("write file");
+    }
+    let toml = format!(
+        "[camera]\neye = [0.0, 0.0, {e}]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov_deg = 60.0\n\n\
+         [image]\nwidth = 8\nheight = 8\nsamples_per_pixel = 1\n\n[radiosity]\nmax_element_edge = {edge}\n\n\
+         [[mesh]]\nobj = \"m.obj\"\n",
+        e = 0.5 * lamp_height
+    );
+    std::fs::write(dir.path().join("scene.toml"), toml).expect("write scene");
+    dir
+}
+
+fn load(dir: &Path) -> scene::SceneDescription {
+    scene::load(&dir.join("scene.toml")).expect("scene loads")
+}
+
+/// Point-to-parallel-rectangle form factor with the rectangle's corner straight above the point
+/// (Howell's catalogue, C-11): X = w/h, Y = d/h,
+/// F = 1/(2π) [X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))].
+fn corner_form_factor(w: f64, d: f64, h: f64) -> f64 {
+    let (x, y) = (w / h, d / h);
+    let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+    (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
+}
+
+/// Form factor from a point (x, y) on the floor to the lamp [−a, a]² at height h: four corner pieces.
+fn form_factor_to_lamp(x: f64, y: f64, a: f64, h: f64) -> f64 {
+    let mut f = 0.0;
+    for w in [a - x, a + x] {
+        for d in [a - y, a + y] {
+            f += corner_form_factor(w, d, h);
+        }
+    }
+    f
+}
+
+#[test]
+fn element_mean_albedo_is_the_exact_average_of_its_texels() {
+    // 4×4 texture on the 2×2 floor, elements of edge 0.5: each element covers exactly one texel, so its
+    // mean albedo is that texel's min(Kd·srgb⁻¹(g), 0.98). Texel rows run top (v = 1, y = +1) down.
+    let grey: Vec<u8> = (0..16).map(|k| (k * 17) as u8).collect();
+    let png = png_bytes(4, 4, &grey);
+    let dir = write_scene("Kd 0.9 0.8 1.2\nmap_Kd t.png", &[("t.png", &png)], 1.0, 1.0, 0.5, true);
+    let s = load(dir.path());
+    let (textures, warnings) = SceneTextures::load(&s.materials);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let mesh = Mesh::build_with_textures(&s, 0.5, Arc::new(textures));
+    let floor = s.materials.iter().position(|m| m.name == "floor").expect("floor") as u32;
+    let mut checked = 0;
+    for e in 0..mesh.elements.len() {
+        if mesh.elements.material[e] != floor {
+            continue;
+        }
+        let c = mesh.elements.centre[e];
+        let column = ((c.x + 1.0) * 2.0).floor() as usize;
+        let row = 3 - ((c.y + 1.0) * 2.0).floor() as usize;
+        let t = srgb_to_linear(grey[row * 4 + column] as f32 / 255.0);
+        let expected = (Vec3::new(0.9, 0.8, 1.2) * t).min(Vec3::splat(ALBEDO_CEILING));
+        // f32 sums of a few products of order 1: 1e-5 relative is ~100 ulps.
+        let got = mesh.elements.reflectance[e];
+        assert!(
+            (got - expected).abs().max_element() <= 1e-5 * expected.max_element().max(1e-3),
+            "{e}: {got} {expected}"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 16);
+}
+
+#[test]
+fn a_textured_floor_under_a_large_lamp_shows_the_texture_times_the_analytic_irradiance() {
+    // Grey checker of sRGB 200 and 60 on a 4×4 texture, 2×2 elements of 2×2 texels: every element has
+    // the same mean albedo, so pass one's irradiance H is smooth and the texture ratio alone must make
+    // the pattern. The floor sees only the lamp (Kd 0, Ke 1): H(x) = π·Le·F(x) with F the analytic
+    // form factor to the lamp, and the radiance at x is L = ρ(x)·H(x)/π = ρ(x)·F(x).
+    let (a, h) = (4.0f32, 0.5f32);
+    let grey: Vec<u8> = (0..16).map(|k| if (k % 4 + k / 4) % 2 == 0 { 200 } else { 60 }).collect();
+    let png = png_bytes(4, 4, &grey);
+    let dir = write_scene("Kd 0.9 0.9 0.9\nmap_Kd c.png", &[("c.png", &png)], a, h, 1.0, true);
+    let s = load(dir.path());
+    let progress = Progress::hidden();
+    let photons = RunPhotons::default();
+    let mut stats = RunStats::default();
+    let (mesh, solution) = run::pass_one(&s, None, &photons, &progress, &mut stats).expect("pass one");
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let tracer = Tracer::new(&mesh, &accel, &solution, &s.materials, &s.render).expect("tracer");
+    let mut sampler = Sampler::independent(1, 1);
+    let mut counts = RayCounts::default();
+    let mut worst = 0.0f64;
+    for j in 0..4 {
+        for i in 0..4 {
+            // Texel centres away from the floor's rim (where Gouraud reads only the rim elements).
+            let uv = Vec2::new((i as f32 + 0.5) / 4.0, (j as f32 + 0.5) / 4.0);
+            let (x, y) = (2.0 * uv.x - 1.0, 2.0 * uv.y - 1.0);
+            let origin = Vec3::new(x, y, 0.25 * h);
+            let l = tracer.radiance(origin, Vec3::NEG_Z, TraceMode::Radiosity, &mut sampler, &mut counts);
+            let row = 3 - j;
+            let rho = (0.9 * srgb_to_linear(grey[row * 4 + i] as f32 / 255.0)) as f64;
+            let expected = rho * form_factor_to_lamp(x as f64, y as f64, a as f64, h as f64);
+            let error = (l.x as f64 - expected).abs() / expected;
+            worst = worst.max(error);
+        }
+    }
+    // Tolerance 1%: the hemicube's form factor to a lamp that fills most of the hemisphere and the
+    // Gouraud-interpolated element irradiance agree with F(x) to 0.1% here (measured); the checker's
+    // 1:4 contrast would show as a ≥ 50% error without the texture ratio.
+    assert!(worst < 0.01, "worst relative error {worst}");
+}
+
+#[test]
+fn a_missing_texture_warns_with_its_file_and_renders_with_kd() {
+    let dir = write_scene("Kd 0.5 0.4 0.3\nmap_Kd nowhere.png", &[], 1.0, 1.0, 1.0, true);
+    let out = dir.path().join("out.exr");
+    let scene_path = dir.path().join("scene.toml");
+    let output = common::radray(&[
+        "render",
+        scene_path.to_str().expect("utf-8 path"),
+        "-o",
+        out.to_str().expect("utf-8 path"),
+        "--quality",
+        "preview",
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("warning") && stderr.contains("nowhere.png") && stderr.contains("Kd"), "{stderr}");
+    assert!(out.exists());
+    // Pass one sees Kd on every floor element.
+    let s = load(dir.path());
+    let (textures, warnings) = SceneTextures::load(&s.materials);
+    assert_eq!(warnings.len(), 1);
+    let mesh = Mesh::build_with_textures(&s, 1.0, Arc::new(textures));
+    let floor = s.materials.iter().position(|m| m.name == "floor").expect("floor") as u32;
+    for e in (0..mesh.elements.len()).filter(|&e| mesh.elements.material[e] == floor) {
+        assert_eq!(mesh.elements.reflectance[e], Vec3::new(0.5, 0.4, 0.3));
+    }
+}
+
+#[test]
+fn a_textured_face_without_vt_warns_once_and_uses_kd() {
+    let png = png_bytes(1, 1, &[255]);
+    let dir = write_scene("Kd 0.5 0.4 0.3\nmap_Kd w.png", &[("w.png", &png)], 1.0, 1.0, 1.0, false);
+    let s = load(dir.path());
+    let notes: Vec<&String> = s.warnings.iter().filter(|w| w.contains("texture coordinates")).collect();
+    assert_eq!(notes.len(), 1, "{:?}", s.warnings);
+    let (textures, _) = SceneTextures::load(&s.materials);
+    let mesh = Mesh::build_with_textures(&s, 1.0, Arc::new(textures));
+    let floor = s.materials.iter().position(|m| m.name == "floor").expect("floor") as u32;
+    for e in (0..mesh.elements.len()).filter(|&e| mesh.elements.material[e] == floor) {
+        assert_eq!(mesh.elements.reflectance[e], Vec3::new(0.5, 0.4, 0.3));
+    }
+}
+
+#[test]
+fn the_fingerprint_changes_with_the_texture_contents_and_path() {
+    let fingerprint_of = |dir: &Path| {
+        let s = load(dir);
+        let (textures, _) = SceneTextures::load(&s.materials);
+        fingerprint(&Mesh::build_with_textures(&s, 1.0, Arc::new(textures)), &s.materials)
+    };
+    // Two textures with the same mean over each element (a 2×2 checker and its mirror image): the
+    // element albedos agree, only the texels differ.
+    let (p1, p2) = (png_bytes(2, 2, &[200, 60, 60, 200]), png_bytes(2, 2, &[60, 200, 200, 60]));
+    let dir = write_scene("Kd 0.5 0.5 0.5\nmap_Kd t.png", &[("t.png", &p1), ("u.png", &p1)], 1.0, 1.0, 2.0, true);
+    let first = fingerprint_of(dir.path());
+    assert_eq!(first, fingerprint_of(dir.path()), "stable");
+    std::fs::write(dir.path().join("t.png"), &p2).expect("rewrite texture");
+    let edited = fingerprint_of(dir.path());
+    assert_ne!(first, edited, "texture contents");
+    let mtl = std::fs::read_to_string(dir.path().join("m.mtl")).expect("MTL").replace("t.png", "u.png");
+    std::fs::write(dir.path().join("m.mtl"), mtl).expect("rewrite MTL");
+    assert_ne!(edited, fingerprint_of(dir.path()), "texture path");
+}
+
+#[test]
+fn rays_pass_through_a_cut_out_and_stop_where_it_is_opaque() {
+    // map_d of 2×1 texels: transparent (0) for u < ½ (x < 0), opaque (255) for u > ½. Rays from below
+    // the one-sided floor, going up: through the cut-out they reach the lamp (radiance Ke = 1); where
+    // the floor is opaque they meet its back side, which is black.
+    let mask = png_bytes(2, 1, &[0, 255]);
+    let dir = write_scene("Kd 0.5 0.5 0.5\nmap_d m.png", &[("m.png", &mask)], 1.0, 1.0, 1.0, true);
+    let s = load(dir.path());
+    let progress = Progress::hidden();
+    let photons = RunPhotons::default();
+    let mut stats = RunStats::default();
+    let (mesh, solution) = run::pass_one(&s, None, &photons, &progress, &mut stats).expect("pass one");
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let tracer = Tracer::new(&mesh, &accel, &solution, &s.materials, &s.render).expect("tracer");
+    let mut sampler = Sampler::independent(1, 1);
+    let mut counts = RayCounts::default();
+    let mut up_from =
+        |x: f32| tracer.radiance(Vec3::new(x, 0.3, -0.5), Vec3::Z, TraceMode::Radiosity, &mut sampler, &mut counts);
+    // The lamp's radiance is its Ke exactly (E/π with E = π·Ke): f32 rounding only.
+    assert!((up_from(-0.5) - Vec3::ONE).abs().max_element() < 1e-5, "{}", up_from(-0.5));
+    assert_eq!(up_from(0.5), Vec3::ZERO);
+}
