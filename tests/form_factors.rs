@@ -3,28 +3,13 @@
 
 mod common;
 
-use common::hemicube_params;
+use common::{hemicube_params, json_polygon as polygon, json_vec3 as vec3, validation_json as load};
 use glam::Vec3;
 use radray::mesh::Mesh;
 use radray::radiosity::form_factors::{compute, FormFactors};
 use radray::radiosity::hemicube::{point_form_factors, Hemicube, ItemBuffer};
 use radray::scene::{Material, RadiosityParams, SceneDescription};
 use serde_json::Value;
-
-fn load(name: &str) -> Value {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-fn vec3(v: &Value) -> Vec3 {
-    let a = v.as_array().expect("a 3-vector");
-    Vec3::new(a[0].as_f64().unwrap() as f32, a[1].as_f64().unwrap() as f32, a[2].as_f64().unwrap() as f32)
-}
-
-fn polygon(v: &Value) -> Vec<Vec3> {
-    v.as_array().expect("a vertex list").iter().map(vec3).collect()
-}
 
 fn f64_matrix(v: &Value) -> Vec<Vec<f64>> {
     v.as_array().unwrap().iter().map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()).collect()

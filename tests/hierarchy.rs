@@ -2,6 +2,9 @@
 //! the full-matrix solver on the Cornell box, and its own invariants (push-pull conserves power,
 //! refinement never raises the error estimate, thread-count independence, the memory budget).
 
+mod common;
+
+use common::{json_polygon as polygon, json_vec3 as vec3, validation_json as load_json};
 use glam::{DVec3, Vec3};
 use proptest::prelude::*;
 use radray::radiosity::hierarchy::form_factor::{element_to_element, point_to_polygon};
@@ -10,22 +13,6 @@ use radray::radiosity::hierarchy::{self, clusters, gather, refine, solve as hsol
 use radray::scene::{
     self, Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SourceLoc, Surface,
 };
-use serde_json::Value;
-
-fn load_json(name: &str) -> Value {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-fn vec3(v: &Value) -> Vec3 {
-    let a = v.as_array().expect("a 3-vector");
-    Vec3::new(a[0].as_f64().unwrap() as f32, a[1].as_f64().unwrap() as f32, a[2].as_f64().unwrap() as f32)
-}
-
-fn polygon(v: &Value) -> Vec<Vec3> {
-    v.as_array().expect("a vertex list").iter().map(vec3).collect()
-}
 
 fn load_scene(name: &str) -> SceneDescription {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);

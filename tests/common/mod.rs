@@ -144,3 +144,21 @@ pub fn solution(mesh: &Mesh, exitance: Vec<Vec3>, direct: Vec<Vec3>) -> Solution
         },
     }
 }
+
+/// One of the analytic validation cases in `tests/data/` (form factors, enclosures, the furnace).
+pub fn validation_json(name: &str) -> serde_json::Value {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// A validation case's 3-vector.
+pub fn json_vec3(v: &serde_json::Value) -> Vec3 {
+    let a = v.as_array().expect("a 3-vector");
+    Vec3::new(a[0].as_f64().unwrap() as f32, a[1].as_f64().unwrap() as f32, a[2].as_f64().unwrap() as f32)
+}
+
+/// A validation case's vertex list.
+pub fn json_polygon(v: &serde_json::Value) -> Vec<Vec3> {
+    v.as_array().expect("a vertex list").iter().map(json_vec3).collect()
+}
