@@ -3,6 +3,7 @@
 //! light that reached diffuse surfaces through mirrors and glass, and `whitted` is the ray-stack tracer
 //! that the film calls once per sample. The specular rules live in `transport`, shared with pass one.
 
+pub mod back_faces;
 pub mod camera;
 pub mod caustics;
 pub mod diffuse;
