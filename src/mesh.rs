@@ -136,6 +136,21 @@ fn barycentric(a: Vec3, b: Vec3, c: Vec3, p: Vec3) -> Vec3 {
 /// material has no diffuse map or its surface has no uv (it keeps Kd).
 pub fn mean_element_albedo(mesh: &Mesh, textures: &SceneTextures, e: usize) -> Option<Vec3> {
     let maps = textures.maps(mesh.elements.material[e]).filter(|m| m.has_diffuse_texture())?;
+    element_uv_mean(mesh, e, |a, b, c| maps.mean_albedo_over(a, b, c))
+}
+
+/// Pass one's emission of element `e` of a material with `map_Ke`: its mean emitted exitance
+/// Ēₑ = π·Σ_△ A_△ L̄_△ / Σ_△ A_△, L̄_△ = Ke·(exact area average of the texture over the triangle's uv
+/// image) (`MaterialMaps::mean_emission_over`). `None` without an emission map or without uv (the
+/// element keeps π·Ke).
+pub fn mean_element_emission(mesh: &Mesh, textures: &SceneTextures, e: usize) -> Option<Vec3> {
+    let maps = textures.maps(mesh.elements.material[e]).filter(|m| m.has_emission_texture())?;
+    element_uv_mean(mesh, e, |a, b, c| maps.mean_emission_over(a, b, c)).map(|l| l * std::f32::consts::PI)
+}
+
+/// Area average Σ_△ A_△ m(uv_△) / Σ_△ A_△ of a per-uv-triangle mean `m` over element `e`'s one or two
+/// triangles; `None` when its surface has no uv or the element no area.
+fn element_uv_mean(mesh: &Mesh, e: usize, mean_over: impl Fn(Vec2, Vec2, Vec2) -> Vec3) -> Option<Vec3> {
     if !mesh.surface_has_uv.get(mesh.elements.surface[e] as usize).copied().unwrap_or(false) {
         return None;
     }
@@ -145,7 +160,7 @@ pub fn mean_element_albedo(mesh: &Mesh, textures: &SceneTextures, e: usize) -> O
     for f in fans {
         let [a, b, d] = f.map(|k| c[k] as usize);
         let area = 0.5 * (mesh.positions[b] - mesh.positions[a]).cross(mesh.positions[d] - mesh.positions[a]).length();
-        sum += maps.mean_albedo_over(mesh.uvs[a], mesh.uvs[b], mesh.uvs[d]) * area;
+        sum += mean_over(mesh.uvs[a], mesh.uvs[b], mesh.uvs[d]) * area;
         total += area;
     }
     (total > 0.0).then(|| sum / total)
@@ -190,15 +205,21 @@ impl Mesh {
     }
 
     /// `build`, then the reflectance of every element of a textured material on a surface with uv is
-    /// its mean albedo ρ̄ₑ (`mean_element_albedo`); the textures stay with the mesh for pass two.
+    /// its mean albedo ρ̄ₑ (`mean_element_albedo`) and, with `map_Ke`, its emission the mean emitted
+    /// exitance (`mean_element_emission`); the textures stay with the mesh for pass two.
     pub fn build_with_textures(scene: &SceneDescription, max_element_edge: f32, textures: Arc<SceneTextures>) -> Mesh {
         let mut mesh = Mesh::build_geometry(scene, max_element_edge);
         if textures.is_textured() {
-            let albedo: Vec<Option<Vec3>> =
-                (0..mesh.elements.len()).into_par_iter().map(|e| mean_element_albedo(&mesh, &textures, e)).collect();
-            for (e, a) in albedo.into_iter().enumerate() {
-                if let Some(a) = a {
+            let means: Vec<(Option<Vec3>, Option<Vec3>)> = (0..mesh.elements.len())
+                .into_par_iter()
+                .map(|e| (mean_element_albedo(&mesh, &textures, e), mean_element_emission(&mesh, &textures, e)))
+                .collect();
+            for (e, (albedo, emission)) in means.into_iter().enumerate() {
+                if let Some(a) = albedo {
                     mesh.elements.reflectance[e] = a;
+                }
+                if let Some(x) = emission {
+                    mesh.elements.emission[e] = x;
                 }
             }
         }

@@ -243,3 +243,46 @@ fn rays_pass_through_a_cut_out_and_stop_where_it_is_opaque() {
     assert!((up_from(-0.5) - Vec3::ONE).abs().max_element() < 1e-5, "{}", up_from(-0.5));
     assert_eq!(up_from(0.5), Vec3::ZERO);
 }
+
+#[test]
+fn an_emission_map_shows_ke_times_the_texel_and_pass_one_emits_each_elements_exact_mean() {
+    // The floor emits (Kd 0, Ke 2 × a 4×4 grey checker of sRGB 200 and 60); 2×2 elements of 2×2
+    // texels each. Pass one: every element emits E = π·Ke·(mean of its texels), the exact uv mean.
+    // Pass two: the EXR convention, an emitter's pixel is its radiance, now Ke × texel, in both modes.
+    let grey: Vec<u8> = (0..16).map(|k| if (k % 4 + k / 4) % 2 == 0 { 200 } else { 60 }).collect();
+    let png = png_bytes(4, 4, &grey);
+    let dir = write_scene("Kd 0 0 0\nKe 2 2 2\nmap_Ke e.png", &[("e.png", &png)], 0.5, 1.0, 1.0, true);
+    let s = load(dir.path());
+    assert!(s.materials.iter().find(|m| m.name == "floor").expect("floor").is_emitter());
+    let (mesh, solution) =
+        run::pass_one(&s, None, &RunPhotons::default(), &Progress::hidden(), &mut RunStats::default())
+            .expect("pass one");
+    let floor = s.materials.iter().position(|m| m.name == "floor").expect("floor") as u32;
+    let texel = |v: u8| srgb_to_linear(v as f32 / 255.0);
+    let mean = 2.0 * 0.5 * (texel(200) + texel(60));
+    let floor_elements: Vec<usize> = (0..mesh.elements.len()).filter(|&e| mesh.elements.material[e] == floor).collect();
+    assert_eq!(floor_elements.len(), 4);
+    for &e in &floor_elements {
+        let emission = mesh.elements.emission[e];
+        // f32 sums over 4 texels: 1e-5 relative.
+        assert!((emission / (std::f32::consts::PI * mean) - Vec3::ONE).abs().max_element() < 1e-5, "{emission}");
+    }
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let tracer = Tracer::new(&mesh, &accel, &solution, &s.materials, &s.render).expect("tracer");
+    let (mut sampler, mut counts) = (Sampler::independent(1, 1), RayCounts::default());
+    for mode in [TraceMode::Radiosity, TraceMode::Final] {
+        for j in 0..4 {
+            for i in 0..4 {
+                let (u, v) = ((i as f32 + 0.5) / 4.0, (j as f32 + 0.5) / 4.0);
+                let origin = Vec3::new(2.0 * u - 1.0, 2.0 * v - 1.0, 0.25);
+                let l = tracer.radiance(origin, Vec3::NEG_Z, mode, &mut sampler, &mut counts);
+                let expected = 2.0 * texel(grey[(3 - j) * 4 + i]);
+                // Kd 0: nothing reflected, the radiance is the texel's Ke·t exactly (f32 rounding).
+                assert!((l - Vec3::splat(expected)).abs().max_element() < 1e-5, "{mode:?} texel ({i}, {j}): {l}");
+            }
+        }
+        // The untextured lamp keeps showing its Ke.
+        let lamp = tracer.radiance(Vec3::new(0.0, 0.0, 0.5), Vec3::Z, mode, &mut sampler, &mut counts);
+        assert!((lamp - Vec3::ONE).abs().max_element() < 1e-5, "{mode:?} lamp {lamp}");
+    }
+}

@@ -15,7 +15,9 @@
 //!     radiosity is scaled by the ratio.
 //! - Cut-outs (`map_d`, or the alpha of `map_Kd`) let pass two's camera and specular rays pass where
 //!   opacity < ½; pass one (hemicubes) and shadow rays still see the whole triangle.
-//! - `map_Ke` multiplies `Ke` per texel in `MaterialMaps::emission_at`; the passes do not use it yet.
+//! - `map_Ke` multiplies `Ke` per texel. Pass one emits each element's exact mean π·Ke·t̄ₑ
+//!   (`mesh::mean_element_emission`); pass two shows Ke·t(uv) where a ray sees the emitter and lights
+//!   with the element means (shadow rays and photons read `Elements::emission`).
 //!
 //! A missing or unreadable texture file is a warning naming the file (`MapWarning`), and the material
 //! keeps its constant (`Kd`, `Ke`, opaque).

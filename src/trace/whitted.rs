@@ -183,6 +183,18 @@ impl<'a> Tracer<'a> {
         Some(maps.albedo_at(hit.uv, footprint_uv))
     }
 
+    /// Emitted radiance Ke·t(uv) at `hit` of a material with `map_Ke` (trilinear over the same footprint
+    /// as `texel_albedo_at`), or `None` without an emission map or without uv.
+    fn texel_emission_at(&self, hit: &SurfaceHit, distance: f32) -> Option<Vec3> {
+        let mesh = self.mesh;
+        let maps = mesh.textures.maps(hit.material).filter(|m| m.has_emission_texture())?;
+        if !mesh.surface_has_uv.get(hit.surface as usize).copied().unwrap_or(false) {
+            return None;
+        }
+        let footprint_uv = distance * self.pixel_angle_rad * hit.uv_per_length(mesh);
+        Some(maps.emission_at(hit.uv, footprint_uv))
+    }
+
     /// The closest hit along a ray that is not cut out: surfaces whose opacity map reads below ½ at
     /// the hit are passed through (at most `MAX_CUTOUT_CROSSINGS` of them). Returns the hit and the
     /// distance from `origin`.
@@ -282,8 +294,15 @@ impl<'a> Tracer<'a> {
             if let Some(element) = hit.element.map(|e| e as usize) {
                 let exitance = self.diffuse.radiosity_at(&hit);
                 let texel_albedo = self.texel_albedo_at(&hit, distance);
+                // With `map_Ke` the diffuse term takes its textured form (the element's flat emission Eₑ
+                // plus reflected light ρ·H(p)), and Eₑ/π is then swapped for the texel's Ke·t(uv).
+                let emission_swap =
+                    self.texel_emission_at(&hit, distance).map(|texel| texel - elements.emission[element] / PI);
+                let texel_albedo = texel_albedo.or(emission_swap.map(|_| elements.reflectance[element]));
+                let emission_swap = emission_swap.unwrap_or(Vec3::ZERO);
                 if mode == TraceMode::Radiosity {
-                    radiance += ray.throughput * self.diffuse.radiosity_radiance(&hit, element, exitance, texel_albedo);
+                    radiance += ray.throughput
+                        * (self.diffuse.radiosity_radiance(&hit, element, exitance, texel_albedo) + emission_swap);
                     continue;
                 }
                 // The texel albedo on a textured surface, the element's reflectance otherwise.
@@ -317,7 +336,7 @@ impl<'a> Tracer<'a> {
                     irradiance,
                     caustic,
                 );
-                radiance += ray.throughput * diffuse;
+                radiance += ray.throughput * (diffuse + emission_swap);
                 if let Some((_, n)) = highlight {
                     // Normalised Phong lobe: f = Ks·(n + 2)/(2π)·cosⁿα.
                     radiance += ray.throughput * material.specular_reflectance * ((n + 2.0) / (2.0 * PI)) * phong;
