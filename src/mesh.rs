@@ -85,6 +85,10 @@ pub struct Mesh {
     pub surface_has_uv: Vec<bool>,
     /// The scene's loaded texture maps (empty for an untextured scene), shared with pass two.
     pub textures: Arc<SceneTextures>,
+    /// Per element, its mean opacity ᾱₑ (`mean_element_coverage`) when the scene has cut-outs
+    /// (`map_d`, or the alpha of `map_Kd`); empty otherwise. Hemicubes skip elements with ᾱₑ < ½
+    /// (`hidden_from_hemicubes`).
+    pub element_coverage: Vec<f32>,
 }
 
 /// Texture coordinates at point `p` of a planar triangle or convex quad with corner uvs: for a
@@ -148,6 +152,13 @@ pub fn mean_element_emission(mesh: &Mesh, textures: &SceneTextures, e: usize) ->
     element_uv_mean(mesh, e, |a, b, c| maps.mean_emission_over(a, b, c)).map(|l| l * std::f32::consts::PI)
 }
 
+/// Element `e`'s mean opacity ᾱₑ, the exact area average of its cut-out map over its uv triangles
+/// (`MaterialMaps::mean_opacity_over`); `None` without a cut-out map or uv (the element is opaque).
+pub fn mean_element_coverage(mesh: &Mesh, textures: &SceneTextures, e: usize) -> Option<f32> {
+    let maps = textures.maps(mesh.elements.material[e]).filter(|m| m.has_opacity())?;
+    element_uv_mean(mesh, e, |a, b, c| Vec3::splat(maps.mean_opacity_over(a, b, c))).map(|v| v.x)
+}
+
 /// Area average Σ_△ A_△ m(uv_△) / Σ_△ A_△ of a per-uv-triangle mean `m` over element `e`'s one or two
 /// triangles; `None` when its surface has no uv or the element no area.
 fn element_uv_mean(mesh: &Mesh, e: usize, mean_over: impl Fn(Vec2, Vec2, Vec2) -> Vec3) -> Option<Vec3> {
@@ -205,8 +216,9 @@ impl Mesh {
     }
 
     /// `build`, then the reflectance of every element of a textured material on a surface with uv is
-    /// its mean albedo ρ̄ₑ (`mean_element_albedo`) and, with `map_Ke`, its emission the mean emitted
-    /// exitance (`mean_element_emission`); the textures stay with the mesh for pass two.
+    /// its mean albedo ρ̄ₑ (`mean_element_albedo`), with `map_Ke` its emission the mean emitted
+    /// exitance (`mean_element_emission`), and with cut-outs every element gets its mean opacity
+    /// (`element_coverage`); the textures stay with the mesh for pass two.
     pub fn build_with_textures(scene: &SceneDescription, max_element_edge: f32, textures: Arc<SceneTextures>) -> Mesh {
         let mut mesh = Mesh::build_geometry(scene, max_element_edge);
         if textures.is_textured() {
@@ -221,6 +233,12 @@ impl Mesh {
                 if let Some(x) = emission {
                     mesh.elements.emission[e] = x;
                 }
+            }
+            if textures.has_cut_outs() {
+                mesh.element_coverage = (0..mesh.elements.len())
+                    .into_par_iter()
+                    .map(|e| mean_element_coverage(&mesh, &textures, e).unwrap_or(1.0))
+                    .collect();
             }
         }
         mesh.textures = textures;
@@ -414,6 +432,17 @@ impl Mesh {
             self.triangle_back_element.push(NONE);
             self.triangle_back_vertices.push([NONE; 3]);
         }
+    }
+
+    /// Pass one's treatment of cut-outs: an element whose mean opacity ᾱₑ is below ½ is not drawn in
+    /// any hemicube, so it neither occludes nor receives a share of another element's view (it still
+    /// gathers light through its own hemicube, for pass two to show on its opaque texels). An element
+    /// with ᾱₑ ≥ ½ is drawn whole. The occlusion error is the misclassified part of each element,
+    /// min(ᾱₑ, 1 − ᾱₑ) ≤ ½ of its projected area, and vanishes as elements shrink to the scale of the
+    /// map's features (then ᾱₑ tends to 0 or 1); light through foliage with random coverage errs both
+    /// ways and partly cancels.
+    pub fn hidden_from_hemicubes(&self, e: usize) -> bool {
+        self.element_coverage.get(e).is_some_and(|&alpha| alpha < 0.5)
     }
 
     /// The element on the side of triangle `t` that a ray or a light direction meets: the triangle's

@@ -206,20 +206,52 @@ impl<'a> Tracer<'a> {
             let hit = self.accel.closest_hit(from, dir, 0.0, f32::INFINITY)?;
             let surface_hit = SurfaceHit::new(mesh, &hit, dir);
             let distance = travelled + hit.t;
-            let cut = match mesh.textures.maps(surface_hit.material).filter(|m| m.has_opacity()) {
-                Some(maps) if mesh.surface_has_uv.get(surface_hit.surface as usize).copied().unwrap_or(false) => {
-                    let footprint_uv = distance * self.pixel_angle_rad * surface_hit.uv_per_length(mesh);
-                    maps.opacity_at(surface_hit.uv, footprint_uv) < 0.5
-                }
-                _ => false,
-            };
-            if !cut {
+            if !self.is_cut_out(&surface_hit, distance * self.pixel_angle_rad) {
                 return Some((surface_hit, distance));
             }
             from = surface_hit.position + dir * self.offset;
             travelled = distance + self.offset;
         }
         None
+    }
+
+    /// The surface's opacity map reads below ½ at `hit`, looked up over a footprint of `footprint`
+    /// scene units (false without a map or uv).
+    fn is_cut_out(&self, hit: &SurfaceHit, footprint: f32) -> bool {
+        let mesh = self.mesh;
+        match mesh.textures.maps(hit.material).filter(|m| m.has_opacity()) {
+            Some(maps) if mesh.surface_has_uv.get(hit.surface as usize).copied().unwrap_or(false) => {
+                maps.opacity_at(hit.uv, footprint * hit.uv_per_length(mesh)) < 0.5
+            }
+            _ => false,
+        }
+    }
+
+    /// A shadow ray from `origin` along unit `dir` meets an opaque surface before `t_max`. Cut-outs
+    /// let it through where their opacity is below ½ (the finest texels: a shadow ray has no pixel
+    /// footprint), so a leaf's shadow has the leaf's holes; more than `MAX_CUTOUT_CROSSINGS` cut-outs
+    /// count as blocked. Without cut-outs in the scene this is the accelerator's any-hit query.
+    fn shadow_blocked(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        if !self.mesh.textures.has_cut_outs() {
+            return self.accel.occluded(origin, dir, t_max);
+        }
+        let mut from = origin;
+        let mut travelled = 0.0f32;
+        for _ in 0..=MAX_CUTOUT_CROSSINGS {
+            let Some(hit) = self.accel.closest_hit(from, dir, 0.0, t_max - travelled) else {
+                return false;
+            };
+            let surface_hit = SurfaceHit::new(self.mesh, &hit, dir);
+            if !self.is_cut_out(&surface_hit, 0.0) {
+                return true;
+            }
+            from = surface_hit.position + dir * self.offset;
+            travelled += hit.t + self.offset;
+            if travelled >= t_max {
+                return false;
+            }
+        }
+        true
     }
 
     /// Builds a caustic map from the run's `photons` (`transport::photons`, the ones pass one's
@@ -411,7 +443,7 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             counts.shadow += 1;
-            if self.accel.occluded(origin, w, dist - self.offset) {
+            if self.shadow_blocked(origin, w, dist - self.offset) {
                 continue;
             }
             let contribution = emitted_radiance * (cos_here * cos_light / dist2 * weight);
