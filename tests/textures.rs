@@ -368,3 +368,41 @@ fn shadow_rays_pass_through_cut_outs_so_a_leafs_shadow_has_its_holes() {
     let shadow = at(0.5).max_element();
     assert!(shadow < 1e-2 * hole, "under the opaque half {shadow}, under the hole {hole}");
 }
+
+#[test]
+fn an_object_whose_faces_only_partly_have_vt_keeps_uv_on_those_that_do() {
+    // One object, one textured material (Kd 0.5 × a 2×1 texture of sRGB 255 | 0): the first quad has
+    // `vt` over the unit square, the second (beside it) none. The first keeps its uv, so its left and
+    // right elements see white and black texels (ρ̄ = 0.5 and 0); the second warns once and uses Kd.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let obj = "mtllib m.mtl\no wall\nv 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nv 3 0 0\nv 5 0 0\nv 5 1 0\nv 3 1 0\n\
+               vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl wall\nf 1/1 2/2 3/3 4/4\nf 5 6 7 8\n\
+               usemtl lamp\nf 5 8 4 1\n";
+    std::fs::write(dir.path().join("m.obj"), obj).expect("write OBJ");
+    let mtl = "newmtl lamp\nKd 0 0 0\nKe 1 1 1\n\nnewmtl wall\nKd 0.5 0.5 0.5\nmap_Kd t.png\n";
+    std::fs::write(dir.path().join("m.mtl"), mtl).expect("write MTL");
+    std::fs::write(dir.path().join("t.png"), png_bytes(2, 1, &[255, 0])).expect("write texture");
+    let toml = "[radiosity]\nmax_element_edge = 1.0\n\n[[mesh]]\nobj = \"m.obj\"\n";
+    std::fs::write(dir.path().join("scene.toml"), toml).expect("write scene");
+    let s = load(dir.path());
+    let notes: Vec<&String> = s.warnings.iter().filter(|w| w.contains("texture coordinates")).collect();
+    assert_eq!(notes.len(), 1, "{:?}", s.warnings);
+    assert!(notes[0].contains("1 face(s)"), "{}", notes[0]);
+    let material = s.materials.iter().position(|m| m.name == "wall").expect("wall") as u32;
+    let wall: Vec<&scene::Surface> = s.surfaces.iter().filter(|f| f.material == material).collect();
+    assert_eq!(wall.len(), 2);
+    assert_eq!(wall[0].uvs.as_deref(), Some(&[Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y][..]));
+    assert_eq!(wall[1].uvs, None);
+    let (textures, _) = SceneTextures::load(&s.materials);
+    let mesh = Mesh::build_with_textures(&s, 1.0, Arc::new(textures));
+    for e in (0..mesh.elements.len()).filter(|&e| mesh.elements.material[e] == material) {
+        let x = mesh.elements.centre[e].x;
+        let expected = match x {
+            x if x < 1.0 => Vec3::splat(0.5),
+            x if x < 2.0 => Vec3::ZERO,
+            _ => Vec3::splat(0.5),
+        };
+        // The exact texel mean in f32: 1e-6.
+        assert!((mesh.elements.reflectance[e] - expected).abs().max_element() < 1e-6, "element at x = {x}");
+    }
+}
