@@ -4,6 +4,7 @@
 use crate::mesh;
 use crate::radiosity::form_factors;
 use crate::scene::SceneDescription;
+use crate::trace::back_faces::{self, BackFaceShare};
 
 /// One emitting material's share of the scene.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -30,6 +31,9 @@ pub struct InfoReport {
     /// Predicted hemicube time on this machine's cores (`radiosity::form_factors::estimate`).
     pub estimated_form_factor_seconds: f64,
     pub warnings: Vec<String>,
+    /// Share of the camera's primary hits on back faces of one-sided surfaces (`trace::back_faces`);
+    /// `None` when the scene is too large to mesh.
+    pub back_faces: Option<BackFaceShare>,
     pub geometry: crate::scene::lint::GeometryReport,
 }
 
@@ -65,12 +69,13 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
     }
     // Meshing is cheap (milliseconds for 10⁵ elements), so the estimate uses the real mesh unless the
     // element count is beyond what radray would mesh at all.
-    let (bytes, seconds) = if elements <= crate::run::MAX_ELEMENTS {
+    let (bytes, seconds, back_faces) = if elements <= crate::run::MAX_ELEMENTS {
         let mesh = mesh::Mesh::build(scene, p.max_element_edge);
         let e = form_factors::estimate(&mesh, p);
-        (e.matrix_bytes, e.seconds)
+        let accel = crate::accel::Accel::build(&mesh.positions, &mesh.triangles);
+        (e.matrix_bytes, e.seconds, Some(back_faces::probe_scene(scene, &mesh, &accel)))
     } else {
-        (u64::MAX, f64::INFINITY)
+        (u64::MAX, f64::INFINITY, None)
     };
     InfoReport {
         scene: scene.path.display().to_string(),
@@ -84,6 +89,7 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
         estimated_form_factor_bytes: bytes,
         estimated_form_factor_seconds: seconds,
         warnings: scene.warnings.clone(),
+        back_faces,
         geometry: crate::scene::lint::check(scene),
     }
 }
@@ -111,6 +117,22 @@ impl std::fmt::Display for InfoReport {
             self.estimated_form_factor_bytes as f64 / MIB,
             self.estimated_form_factor_seconds
         )?;
+        if let Some(b) = &self.back_faces {
+            writeln!(
+                f,
+                "back faces      {:.1}% of primary hits ({} of {} probe rays hit)",
+                100.0 * b.share(),
+                b.hits,
+                b.rays
+            )?;
+            if b.is_large() {
+                writeln!(
+                    f,
+                    "                suggestion: `two_sided = true` on the meshes seen from behind (pass two shows \
+                     the back of a one-sided surface black)"
+                )?;
+            }
+        }
         for w in &self.warnings {
             writeln!(f, "warning         {w}")?;
         }

@@ -85,6 +85,10 @@ pub struct Mesh {
     pub surface_has_uv: Vec<bool>,
     /// The scene's loaded texture maps (empty for an untextured scene), shared with pass two.
     pub textures: Arc<SceneTextures>,
+    /// Per element, its mean opacity ᾱₑ (`mean_element_coverage`) when the scene has cut-outs
+    /// (`map_d`, or the alpha of `map_Kd`); empty otherwise. Hemicubes skip elements with ᾱₑ < ½
+    /// (`hidden_from_hemicubes`).
+    pub element_coverage: Vec<f32>,
 }
 
 /// Texture coordinates at point `p` of a planar triangle or convex quad with corner uvs: for a
@@ -136,6 +140,28 @@ fn barycentric(a: Vec3, b: Vec3, c: Vec3, p: Vec3) -> Vec3 {
 /// material has no diffuse map or its surface has no uv (it keeps Kd).
 pub fn mean_element_albedo(mesh: &Mesh, textures: &SceneTextures, e: usize) -> Option<Vec3> {
     let maps = textures.maps(mesh.elements.material[e]).filter(|m| m.has_diffuse_texture())?;
+    element_uv_mean(mesh, e, |a, b, c| maps.mean_albedo_over(a, b, c))
+}
+
+/// Pass one's emission of element `e` of a material with `map_Ke`: its mean emitted exitance
+/// Ēₑ = π·Σ_△ A_△ L̄_△ / Σ_△ A_△, L̄_△ = Ke·(exact area average of the texture over the triangle's uv
+/// image) (`MaterialMaps::mean_emission_over`). `None` without an emission map or without uv (the
+/// element keeps π·Ke).
+pub fn mean_element_emission(mesh: &Mesh, textures: &SceneTextures, e: usize) -> Option<Vec3> {
+    let maps = textures.maps(mesh.elements.material[e]).filter(|m| m.has_emission_texture())?;
+    element_uv_mean(mesh, e, |a, b, c| maps.mean_emission_over(a, b, c)).map(|l| l * std::f32::consts::PI)
+}
+
+/// Element `e`'s mean opacity ᾱₑ, the exact area average of its cut-out map over its uv triangles
+/// (`MaterialMaps::mean_opacity_over`); `None` without a cut-out map or uv (the element is opaque).
+pub fn mean_element_coverage(mesh: &Mesh, textures: &SceneTextures, e: usize) -> Option<f32> {
+    let maps = textures.maps(mesh.elements.material[e]).filter(|m| m.has_opacity())?;
+    element_uv_mean(mesh, e, |a, b, c| Vec3::splat(maps.mean_opacity_over(a, b, c))).map(|v| v.x)
+}
+
+/// Area average Σ_△ A_△ m(uv_△) / Σ_△ A_△ of a per-uv-triangle mean `m` over element `e`'s one or two
+/// triangles; `None` when its surface has no uv or the element no area.
+fn element_uv_mean(mesh: &Mesh, e: usize, mean_over: impl Fn(Vec2, Vec2, Vec2) -> Vec3) -> Option<Vec3> {
     if !mesh.surface_has_uv.get(mesh.elements.surface[e] as usize).copied().unwrap_or(false) {
         return None;
     }
@@ -145,7 +171,7 @@ pub fn mean_element_albedo(mesh: &Mesh, textures: &SceneTextures, e: usize) -> O
     for f in fans {
         let [a, b, d] = f.map(|k| c[k] as usize);
         let area = 0.5 * (mesh.positions[b] - mesh.positions[a]).cross(mesh.positions[d] - mesh.positions[a]).length();
-        sum += maps.mean_albedo_over(mesh.uvs[a], mesh.uvs[b], mesh.uvs[d]) * area;
+        sum += mean_over(mesh.uvs[a], mesh.uvs[b], mesh.uvs[d]) * area;
         total += area;
     }
     (total > 0.0).then(|| sum / total)
@@ -190,16 +216,29 @@ impl Mesh {
     }
 
     /// `build`, then the reflectance of every element of a textured material on a surface with uv is
-    /// its mean albedo ρ̄ₑ (`mean_element_albedo`); the textures stay with the mesh for pass two.
+    /// its mean albedo ρ̄ₑ (`mean_element_albedo`), with `map_Ke` its emission the mean emitted
+    /// exitance (`mean_element_emission`), and with cut-outs every element gets its mean opacity
+    /// (`element_coverage`); the textures stay with the mesh for pass two.
     pub fn build_with_textures(scene: &SceneDescription, max_element_edge: f32, textures: Arc<SceneTextures>) -> Mesh {
         let mut mesh = Mesh::build_geometry(scene, max_element_edge);
         if textures.is_textured() {
-            let albedo: Vec<Option<Vec3>> =
-                (0..mesh.elements.len()).into_par_iter().map(|e| mean_element_albedo(&mesh, &textures, e)).collect();
-            for (e, a) in albedo.into_iter().enumerate() {
-                if let Some(a) = a {
+            let means: Vec<(Option<Vec3>, Option<Vec3>)> = (0..mesh.elements.len())
+                .into_par_iter()
+                .map(|e| (mean_element_albedo(&mesh, &textures, e), mean_element_emission(&mesh, &textures, e)))
+                .collect();
+            for (e, (albedo, emission)) in means.into_iter().enumerate() {
+                if let Some(a) = albedo {
                     mesh.elements.reflectance[e] = a;
                 }
+                if let Some(x) = emission {
+                    mesh.elements.emission[e] = x;
+                }
+            }
+            if textures.has_cut_outs() {
+                mesh.element_coverage = (0..mesh.elements.len())
+                    .into_par_iter()
+                    .map(|e| mean_element_coverage(&mesh, &textures, e).unwrap_or(1.0))
+                    .collect();
             }
         }
         mesh.textures = textures;
@@ -393,6 +432,17 @@ impl Mesh {
             self.triangle_back_element.push(NONE);
             self.triangle_back_vertices.push([NONE; 3]);
         }
+    }
+
+    /// Pass one's treatment of cut-outs: an element whose mean opacity ᾱₑ is below ½ is not drawn in
+    /// any hemicube, so it neither occludes nor receives a share of another element's view (it still
+    /// gathers light through its own hemicube, for pass two to show on its opaque texels). An element
+    /// with ᾱₑ ≥ ½ is drawn whole. The occlusion error is the misclassified part of each element,
+    /// min(ᾱₑ, 1 − ᾱₑ) ≤ ½ of its projected area, and vanishes as elements shrink to the scale of the
+    /// map's features (then ᾱₑ tends to 0 or 1); light through foliage with random coverage errs both
+    /// ways and partly cancels.
+    pub fn hidden_from_hemicubes(&self, e: usize) -> bool {
+        self.element_coverage.get(e).is_some_and(|&alpha| alpha < 0.5)
     }
 
     /// The element on the side of triangle `t` that a ray or a light direction meets: the triangle's

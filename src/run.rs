@@ -364,6 +364,9 @@ pub fn render_plan(
     stats: &mut RunStats,
 ) -> Result<Vec<PathBuf>, Failure> {
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    if let Some(warning) = crate::trace::back_faces::probe_scene(scene, mesh, &accel).warning() {
+        progress.note(&format!("warning: {warning}"));
+    }
     let mut written = Vec::new();
     let mut rendered: Vec<(TraceMode, Image)> = Vec::new();
     for (mode, path) in plan {

@@ -149,6 +149,25 @@ impl MaterialMaps {
         }
     }
 
+    /// Pass one: mean opacity ᾱ = (1/A) ∫_△ clamp(α(u), 0, 1) du over a uv triangle (exact area
+    /// average, `Texture::mean_over_triangle_of`); 1 without a cut-out map.
+    pub fn mean_opacity_over(&self, uv0: Vec2, uv1: Vec2, uv2: Vec2) -> f32 {
+        match &self.opacity {
+            Some((t, channel)) => {
+                let channel = *channel;
+                t.mean_over_triangle_of(uv0, uv1, uv2, |texel| {
+                    let value = match channel {
+                        OpacityChannel::Alpha => texel.w,
+                        OpacityChannel::First => texel.x,
+                    };
+                    Vec4::splat(value.clamp(0.0, 1.0))
+                })
+                .x
+            }
+            None => 1.0,
+        }
+    }
+
     /// Emitted radiance at a hit: Ke · t(uv) with `map_Ke`, else Ke.
     pub fn emission_at(&self, uv: Vec2, footprint_uv: f32) -> Vec3 {
         match &self.emission {

@@ -13,9 +13,12 @@
 //!     L = E/π + (B − E)/π · ρ(x)/ρ̄ₑ, since B − E = ρ̄ₑ·H and the irradiance H varies slowly;
 //!   - with per-pixel direct light, the direct term is ρ(x)/π · E_direct(x) and only the indirect
 //!     radiosity is scaled by the ratio.
-//! - Cut-outs (`map_d`, or the alpha of `map_Kd`) let pass two's camera and specular rays pass where
-//!   opacity < ½; pass one (hemicubes) and shadow rays still see the whole triangle.
-//! - `map_Ke` multiplies `Ke` per texel in `MaterialMaps::emission_at`; the passes do not use it yet.
+//! - Cut-outs (`map_d`, or the alpha of `map_Kd`) let pass two's camera, specular and shadow rays pass
+//!   where opacity < ½; pass one leaves elements of mean opacity < ½ out of every hemicube
+//!   (`Mesh::hidden_from_hemicubes`, which states the error).
+//! - `map_Ke` multiplies `Ke` per texel. Pass one emits each element's exact mean π·Ke·t̄ₑ
+//!   (`mesh::mean_element_emission`); pass two shows Ke·t(uv) where a ray sees the emitter and lights
+//!   with the element means (shadow rays and photons read `Elements::emission`).
 //!
 //! A missing or unreadable texture file is a warning naming the file (`MapWarning`), and the material
 //! keeps its constant (`Kd`, `Ke`, opaque).

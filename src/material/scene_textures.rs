@@ -51,6 +51,11 @@ impl SceneTextures {
         self.maps.get(material as usize).and_then(Option::as_ref)
     }
 
+    /// True when some material has a usable cut-out map (`map_d`, or an alpha channel in `map_Kd`).
+    pub fn has_cut_outs(&self) -> bool {
+        self.maps.iter().flatten().any(MaterialMaps::has_opacity)
+    }
+
     /// True when some material has a usable map.
     pub fn is_textured(&self) -> bool {
         self.maps.iter().any(Option::is_some)

@@ -4,6 +4,7 @@
 
 use crate::mesh::Mesh;
 use crate::scene::{Material, RadiosityParams};
+use glam::Vec3;
 
 /// FNV-1a 64-bit hash state (Fowler, Noll, Vo): stable across runs, builds and platforms.
 #[derive(Clone, Copy, Debug)]
@@ -75,7 +76,7 @@ pub fn fingerprint(mesh: &Mesh, materials: &[Material]) -> u64 {
 }
 
 /// Feeds `h` what decides where light goes at mirrors and glass: for each element with a specular
-/// material, its index, Ks, Ni and transmittance (1 − d), and for every element whether it is diffuse
+/// material, its index, Ks, Ni, transmittance (1 − d) and a tinted Tf, and for every element whether it is diffuse
 /// and whether it emits (where specular paths end). Shared by the solution fingerprint and the batch
 /// cache's geometry key, so both go stale together.
 pub fn hash_specular_materials(h: &mut Fnv1a64, mesh: &Mesh, materials: &[Material]) {
@@ -85,6 +86,10 @@ pub fn hash_specular_materials(h: &mut Fnv1a64, mesh: &Mesh, materials: &[Materi
             h.write_u64(i as u64);
             h.write_f32s(m.specular_reflectance.to_array());
             h.write_f32s([m.ior, m.transmittance]);
+            // Only a tinted filter is hashed, so clear glass keeps the fingerprint it always had.
+            if m.is_dielectric() && m.transmission_filter != Vec3::ONE {
+                h.write_f32s(m.transmission_filter.to_array());
+            }
         }
         h.write(&[(e.reflectance[i].max_element() > 0.0) as u8, (e.emission[i].max_element() > 0.0) as u8]);
     }

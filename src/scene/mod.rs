@@ -252,8 +252,9 @@ impl Material {
         self.emitted_radiance * std::f32::consts::PI
     }
 
+    /// Emits light: Ke > 0, or an emission texture (`map_Ke`, which multiplies Ke or 1).
     pub fn is_emitter(&self) -> bool {
-        self.emitted_radiance.max_element() > 0.0
+        self.emitted_radiance.max_element() > 0.0 || self.textures.emission.is_some()
     }
 
     pub fn is_dielectric(&self) -> bool {

@@ -36,10 +36,16 @@ pub struct ObjContents {
     pub warnings: Vec<String>,
 }
 
+/// Texture coordinates of every face in file order: `Some` for a face whose every corner names a `vt`.
+type FaceUvs = Vec<Option<Vec<Vec2>>>;
+
 /// Checks the OBJ text line by line for what tobj would reject without saying where: unparsable
-/// numbers and face indices out of range. Returns the first problem with its line.
-fn validate_text(path: &Path, text: &str) -> Result<(), ObjError> {
+/// numbers and face indices out of range. Returns the first problem with its line, or each face's
+/// texture coordinates (tobj loses them on objects whose faces only partly have `vt`).
+fn validate_text(path: &Path, text: &str) -> Result<FaceUvs, ObjError> {
     let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
+    let mut texcoords: Vec<Vec2> = Vec::new();
+    let mut faces: FaceUvs = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let fail =
             |message: String| ObjError::Malformed { loc: SourceLoc { path: path.to_path_buf(), line: k + 1 }, message };
@@ -67,6 +73,8 @@ fn validate_text(path: &Path, text: &str) -> Result<(), ObjError> {
             "vt" => {
                 numbers(1)?;
                 vt += 1;
+                let coordinate = |k: usize| args.get(k).and_then(|a| a.parse::<f32>().ok()).unwrap_or(0.0);
+                texcoords.push(Vec2::new(coordinate(0), coordinate(1)));
             }
             "vn" => {
                 numbers(3)?;
@@ -76,7 +84,9 @@ fn validate_text(path: &Path, text: &str) -> Result<(), ObjError> {
                 if args.len() < 3 {
                     return Err(fail(format!("a face needs at least 3 vertices, found {}", args.len())));
                 }
+                let mut uvs = Some(Vec::with_capacity(args.len()));
                 for a in &args {
+                    let mut has_vt = false;
                     for (slot, (part, count)) in a.split('/').zip([v, vt, vn]).enumerate() {
                         if part.is_empty() && slot > 0 {
                             continue;
@@ -86,19 +96,29 @@ fn validate_text(path: &Path, text: &str) -> Result<(), ObjError> {
                         if index == 0 || resolved < 1 || resolved > count {
                             return Err(fail(format!("face vertex `{a}` refers to an element that does not exist")));
                         }
+                        if slot == 1 {
+                            has_vt = true;
+                            if let Some(uvs) = uvs.as_mut() {
+                                uvs.push(texcoords[resolved as usize - 1]);
+                            }
+                        }
+                    }
+                    if !has_vt {
+                        uvs = None;
                     }
                 }
+                faces.push(uvs);
             }
             _ => {}
         }
     }
-    Ok(())
+    Ok(faces)
 }
 
 /// Loads an OBJ file and its MTL library.
 pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
     let text = std::fs::read_to_string(path).map_err(|source| ObjError::Read { path: path.to_path_buf(), source })?;
-    validate_text(path, &text)?;
+    let face_uvs = validate_text(path, &text)?;
     let options = tobj::LoadOptions { single_index: true, triangulate: false, ignore_points: true, ignore_lines: true };
     let dir = path.parent().unwrap_or(Path::new("."));
     // Libraries in `mtllib` order; tobj numbers materials in the same order.
@@ -143,6 +163,14 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
     // Faces of a textured material that lack `vt`: one warning per file.
     let mut untextured_faces = 0usize;
     let loc = SourceLoc { path: path.to_path_buf(), line: 0 };
+    // tobj keeps the faces in file order, model after model; `face_uvs` can stand in for its texcoords
+    // only when the counts agree.
+    let face_count: usize = models
+        .iter()
+        .map(|m| if m.mesh.face_arities.is_empty() { m.mesh.indices.len() / 3 } else { m.mesh.face_arities.len() })
+        .sum();
+    let face_uvs = (face_count == face_uvs.len()).then_some(face_uvs);
+    let mut face = 0usize;
     for model in &models {
         let mesh = &model.mesh;
         let material = match mesh.material_id {
@@ -176,7 +204,8 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
         };
         // With `single_index`, tobj keeps one (v, vt, vn) tuple per mesh vertex but appends a texcoord
         // only where the face names one: the texcoords line up with the vertices only when every
-        // face of the object has `vt`. Otherwise the object is read without uv.
+        // face of the object has `vt`. Otherwise each face takes its own `vt` from the text, and the
+        // faces without keep no uv (and their Kd).
         let vertex_count = mesh.positions.len() / 3;
         let has_uv = vertex_count > 0 && mesh.texcoords.len() == 2 * vertex_count;
         let uv = |i: u32| Vec2::new(mesh.texcoords[2 * i as usize], mesh.texcoords[2 * i as usize + 1]);
@@ -189,7 +218,12 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
             start += arity as usize;
             let vertices: Vec<Vec3> = idx.iter().map(|&i| position(i)).collect();
             let normals: Option<Vec<Vec3>> = idx.iter().map(|&i| normal(i)).collect();
-            let uvs = has_uv.then(|| idx.iter().map(|&i| uv(i)).collect::<Vec<Vec2>>());
+            let uvs = if has_uv {
+                Some(idx.iter().map(|&i| uv(i)).collect::<Vec<Vec2>>())
+            } else {
+                face_uvs.as_ref().and_then(|f| f[face].clone()).filter(|uvs| uvs.len() == idx.len())
+            };
+            face += 1;
             if textured && uvs.is_none() {
                 untextured_faces += 1;
             }
@@ -206,8 +240,8 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
     }
     if untextured_faces > 0 {
         out.warnings.push(format!(
-            "{}: {untextured_faces} face(s) of textured materials have no texture coordinates (`vt` on every face \
-             of the object); they use their Kd",
+            "{}: {untextured_faces} face(s) of textured materials have no texture coordinates (`vt`); they use \
+             their Kd",
             path.display()
         ));
     }
@@ -235,5 +269,13 @@ mod tests {
     fn validator_accepts_negative_and_slashed_indices() {
         let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf -3//1 -2//1 -1//1\n";
         validate_text(Path::new("x.obj"), text).unwrap();
+    }
+
+    #[test]
+    fn validator_reads_each_faces_own_texture_coordinates() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.25 0.5\nvt 1 0\nf 1/1 2/2 3/-1\nf 1 2 3\nf 1/1 2 3/2\n";
+        let faces = validate_text(Path::new("x.obj"), text).unwrap();
+        let (a, b) = (Vec2::new(0.25, 0.5), Vec2::new(1.0, 0.0));
+        assert_eq!(faces, vec![Some(vec![a, b, b]), None, None]);
     }
 }

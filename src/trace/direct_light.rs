@@ -6,6 +6,7 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
+use super::cut_outs;
 use super::whitted::RayCounts;
 use crate::accel::Accel;
 use crate::film::Sampler;
@@ -131,7 +132,7 @@ impl<'a> DirectLight<'a> {
                 continue;
             };
             counts.shadow += 1;
-            if self.accel.occluded(origin, w, dist - self.offset) {
+            if cut_outs::shadow_blocked(mesh, self.accel, self.offset, origin, w, dist - self.offset) {
                 continue;
             }
             let contribution = emitted_radiance * (cos_here * cos_light / dist2 * sample.inverse_density / count);

@@ -3,8 +3,10 @@
 //! light that reached diffuse surfaces through mirrors and glass, and `whitted` is the ray-stack tracer
 //! that the film calls once per sample. The specular rules live in `transport`, shared with pass one.
 
+pub mod back_faces;
 pub mod camera;
 pub mod caustics;
+pub mod cut_outs;
 pub mod diffuse;
 pub mod direct_light;
 pub mod whitted;

@@ -8,6 +8,7 @@ use std::ops::AddAssign;
 use glam::Vec3;
 
 use super::caustics::CausticMap;
+use super::cut_outs::{self, MAX_CUTOUT_CROSSINGS};
 use super::diffuse::{Diffuse, DiffuseEstimator};
 use super::direct_light::{DirectEstimate, DirectLight};
 use crate::accel::Accel;
@@ -106,9 +107,6 @@ pub struct Tracer<'a> {
     pixel_angle_rad: f32,
 }
 
-/// Most cut-out surfaces (opacity < ½) one ray passes through before it is stopped.
-const MAX_CUTOUT_CROSSINGS: u32 = 64;
-
 impl<'a> Tracer<'a> {
     pub fn new(
         mesh: &'a Mesh,
@@ -190,6 +188,18 @@ impl<'a> Tracer<'a> {
         Some(maps.albedo_at(hit.uv, footprint_uv))
     }
 
+    /// Emitted radiance Ke·t(uv) at `hit` of a material with `map_Ke` (trilinear over the same footprint
+    /// as `texel_albedo_at`), or `None` without an emission map or without uv.
+    fn texel_emission_at(&self, hit: &SurfaceHit, distance: f32) -> Option<Vec3> {
+        let mesh = self.mesh;
+        let maps = mesh.textures.maps(hit.material).filter(|m| m.has_emission_texture())?;
+        if !mesh.surface_has_uv.get(hit.surface as usize).copied().unwrap_or(false) {
+            return None;
+        }
+        let footprint_uv = distance * self.pixel_angle_rad * hit.uv_per_length(mesh);
+        Some(maps.emission_at(hit.uv, footprint_uv))
+    }
+
     /// The closest hit along a ray that is not cut out: surfaces whose opacity map reads below ½ at
     /// the hit are passed through (at most `MAX_CUTOUT_CROSSINGS` of them). Returns the hit and the
     /// distance from `origin`.
@@ -201,20 +211,17 @@ impl<'a> Tracer<'a> {
             let hit = self.accel.closest_hit(from, dir, 0.0, f32::INFINITY)?;
             let surface_hit = SurfaceHit::new(mesh, &hit, dir);
             let distance = travelled + hit.t;
-            let cut = match mesh.textures.maps(surface_hit.material).filter(|m| m.has_opacity()) {
-                Some(maps) if mesh.surface_has_uv.get(surface_hit.surface as usize).copied().unwrap_or(false) => {
-                    let footprint_uv = distance * self.pixel_angle_rad * surface_hit.uv_per_length(mesh);
-                    maps.opacity_at(surface_hit.uv, footprint_uv) < 0.5
-                }
-                _ => false,
-            };
-            if !cut {
+            if !self.is_cut_out(&surface_hit, distance * self.pixel_angle_rad) {
                 return Some((surface_hit, distance));
             }
             from = surface_hit.position + dir * self.offset;
             travelled = distance + self.offset;
         }
         None
+    }
+
+    fn is_cut_out(&self, hit: &SurfaceHit, footprint: f32) -> bool {
+        cut_outs::is_cut_out(self.mesh, hit, footprint)
     }
 
     /// Builds a caustic map from the run's `photons` (`transport::photons`, the ones pass one's
@@ -289,8 +296,15 @@ impl<'a> Tracer<'a> {
             if let Some(element) = hit.element.map(|e| e as usize) {
                 let exitance = self.diffuse.radiosity_at(&hit);
                 let texel_albedo = self.texel_albedo_at(&hit, distance);
+                // With `map_Ke` the diffuse term takes its textured form (the element's flat emission Eₑ
+                // plus reflected light ρ·H(p)), and Eₑ/π is then swapped for the texel's Ke·t(uv).
+                let emission_swap =
+                    self.texel_emission_at(&hit, distance).map(|texel| texel - elements.emission[element] / PI);
+                let texel_albedo = texel_albedo.or(emission_swap.map(|_| elements.reflectance[element]));
+                let emission_swap = emission_swap.unwrap_or(Vec3::ZERO);
                 if mode == TraceMode::Radiosity {
-                    radiance += ray.throughput * self.diffuse.radiosity_radiance(&hit, element, exitance, texel_albedo);
+                    radiance += ray.throughput
+                        * (self.diffuse.radiosity_radiance(&hit, element, exitance, texel_albedo) + emission_swap);
                     continue;
                 }
                 // The texel albedo on a textured surface, the element's reflectance otherwise.
@@ -324,7 +338,7 @@ impl<'a> Tracer<'a> {
                     light.irradiance,
                     caustic,
                 );
-                radiance += ray.throughput * diffuse;
+                radiance += ray.throughput * (diffuse + emission_swap);
                 if let Some((_, n)) = highlight {
                     // Normalised Phong lobe: f = Ks·(n + 2)/(2π)·cosⁿα.
                     radiance +=

@@ -1,6 +1,7 @@
 //! The specular rules of smooth surfaces, written once for both passes (Whitted 1980): a mirror
-//! reflects with its Ks; a dielectric reflects with Ks·R and refracts with (1 − R)·(1 − d), R the
-//! unpolarised Fresnel reflectance; and the one throughput cutoff that ends a branch.
+//! reflects with its Ks; a dielectric reflects with Ks·R and refracts with (1 − R)·(1 − d)·Tf on the
+//! way in, (1 − R)·(1 − d) on the way out, R the unpolarised Fresnel reflectance and Tf the
+//! transmission filter colour; and the one throughput cutoff that ends a branch.
 
 use glam::Vec3;
 
@@ -17,7 +18,7 @@ pub enum Scatter {
     Mirror { dir: Vec3, reflectance: Vec3 },
     /// A smooth dielectric: a reflected branch with weight Ks·R and, unless light cannot leave on the
     /// other side (total internal reflection, or a shading normal that allows no refraction), a
-    /// refracted branch with weight (1 − R)·(1 − d).
+    /// refracted branch with weight (1 − R)·T, T = (1 − d)·Tf entering and 1 − d leaving.
     Dielectric {
         reflected: Vec3,
         refracted: Option<Vec3>,
@@ -25,8 +26,8 @@ pub enum Scatter {
         fresnel: f32,
         /// Ks.
         reflectance: Vec3,
-        /// 1 − d.
-        transmittance: f32,
+        /// T per channel: (1 − d)·Tf when the ray enters the front side, 1 − d when it leaves.
+        transmittance: Vec3,
     },
 }
 
@@ -55,6 +56,10 @@ impl Branch {
 /// shading normal n_s (mirror: r = d − 2(d·n_s)n_s, falling back to the geometric normal when r would
 /// leave below the surface; refraction by Snell's law with η_i/η_t = 1/Ni entering, Ni leaving), and
 /// R = `fresnel_dielectric`(−d·n_s, η_i, η_t).
+///
+/// The filter colour Tf (`Material::transmission_filter`) tints light once per passage through a closed
+/// solid, when it enters by the front: a glass slab or sphere of filter Tf passes T·Tf, not T·Tf², since
+/// MTL's Tf describes the object, not each of its interfaces.
 pub fn scatter(material: &Material, dir: Vec3, hit: &SurfaceHit) -> Scatter {
     let (shading, facing) = (hit.shading_normal, hit.geometric_normal);
     if material.is_dielectric() {
@@ -65,7 +70,7 @@ pub fn scatter(material: &Material, dir: Vec3, hit: &SurfaceHit) -> Scatter {
             refracted: refract(dir, shading, eta_i / eta_t).filter(|t| t.dot(facing) < 0.0).map(Vec3::normalize),
             fresnel,
             reflectance: material.specular_reflectance,
-            transmittance: material.transmittance,
+            transmittance: material.transmittance * if hit.front { material.transmission_filter } else { Vec3::ONE },
         }
     } else if material.specular_reflectance.max_element() > 0.0 {
         Scatter::Mirror { dir: mirror(dir, shading, facing), reflectance: material.specular_reflectance }
@@ -76,7 +81,8 @@ pub fn scatter(material: &Material, dir: Vec3, hit: &SurfaceHit) -> Scatter {
 
 impl Scatter {
     /// Both branches of a path with throughput T (Whitted's tree): mirror T·Ks; dielectric reflected
-    /// T·Ks·R and, when R < 1, refracted T·(1 − R)·(1 − d). The reflected branch comes first.
+    /// T·Ks·R and, when R < 1, refracted T·(1 − R)·T_d (`Scatter::Dielectric::transmittance`). The
+    /// reflected branch comes first.
     pub fn split(&self, throughput: Vec3) -> [Option<Branch>; 2] {
         match *self {
             Scatter::None => [None, None],
@@ -96,14 +102,14 @@ impl Scatter {
 
     /// One branch by Russian roulette (a photon keeps a single path): a dielectric that can refract
     /// reflects with probability R, drawn as `u() < R` (u uniform in [0, 1), drawn only then), so the
-    /// weights divided by their probabilities are Ks and 1 − d; one that cannot refract reflects with
+    /// weights divided by their probabilities are Ks and T_d; one that cannot refract reflects with
     /// Ks·R. Returns (direction, transmitted, factor): the new throughput is T·factor.
     pub fn choose(&self, u: impl FnOnce() -> f32) -> Option<(Vec3, bool, Vec3)> {
         match *self {
             Scatter::None => None,
             Scatter::Mirror { dir, reflectance } => Some((dir, false, reflectance)),
             Scatter::Dielectric { reflected, refracted, fresnel, reflectance, transmittance } => match refracted {
-                Some(dir) if u() >= fresnel => Some((dir, true, Vec3::splat(transmittance))),
+                Some(dir) if u() >= fresnel => Some((dir, true, transmittance)),
                 Some(_) => Some((reflected, false, reflectance)),
                 None => Some((reflected, false, reflectance * fresnel)),
             },

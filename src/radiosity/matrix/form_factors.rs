@@ -220,7 +220,8 @@ impl ElementHierarchy {
     /// Row i of F: a hemicube at element i's centre (lifted by a thousandth of the element's size along
     /// its normal), aligned with the normal and rotated by `hemicube_rotation_rad`, seeing every other
     /// element (Cohen and Greenberg 1985). Chunks behind the eye's plane, back-facing or outside all
-    /// five face frusta are skipped whole. Appends (j, F_ij) with increasing j to `row`.
+    /// five face frusta are skipped whole, and so are mostly cut-out elements
+    /// (`Mesh::hidden_from_hemicubes`). Appends (j, F_ij) with increasing j to `row`.
     pub fn element_row(
         &self,
         mesh: &Mesh,
@@ -244,7 +245,7 @@ impl ElementHierarchy {
                 continue;
             }
             for j in chunk.elements.clone() {
-                if j == i {
+                if j == i || mesh.hidden_from_hemicubes(j) {
                     continue;
                 }
                 let corners = &e.corners[j][..e.corner_count(j)];
