@@ -12,6 +12,7 @@ Examples:
   radray render scenes/cornell_box.toml --solution cornell.radsol -o view.exr --width 512 --height 512
   radray compare out.exr references/cornell_original/reference.exr --diff diff.png --json
   radray batch jobs.toml --manifest jobs.manifest.json --shard 0/4
+  radray batch jobs.toml --report report.html --resume
   radray info scenes/cornell_box.toml
 
 Exit codes: 0 success, 2 bad input or usage, 1 internal error.";
@@ -161,6 +162,12 @@ pub struct BatchArgs {
     /// Run every N-th job starting at K (0-based): K/N.
     #[arg(long)]
     pub shard: Option<String>,
+    /// Write an HTML page comparing each job's final, radiosity and reference images.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Skip the jobs the manifest records as finished (a killed batch's manifest lists them).
+    #[arg(long)]
+    pub resume: bool,
 }
 
 #[derive(Args, Debug)]
@@ -242,7 +249,14 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Solve(args) => solve_command(&args, &progress),
         Command::Compare(args) => compare_command(&args),
         Command::Batch(args) => {
-            batch::run(&batch::Settings { jobs: args.jobs, manifest: args.manifest, shard: args.shard }, &progress)
+            let settings = batch::Settings {
+                jobs: args.jobs,
+                manifest: args.manifest,
+                shard: args.shard,
+                report: args.report,
+                resume: args.resume,
+            };
+            batch::run(&settings, &progress)
         }
         Command::Info(args) => info_command(&args),
     })
