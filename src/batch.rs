@@ -34,13 +34,24 @@ pub struct Settings {
     pub report: Option<PathBuf>,
     /// Skip the jobs the manifest records as finished (after checking it belongs to the jobs file).
     pub resume: bool,
+    /// Most bytes the caches kept between jobs may hold (over the jobs file's `cache_memory`).
+    pub cache_memory_bytes: Option<u64>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct JobsFile {
+    /// Bound of the caches kept between jobs: bytes, or a size such as "512 MiB".
+    cache_memory: Option<toml::Spanned<MemorySize>>,
     #[serde(default)]
     job: Vec<toml::Spanned<JobEntry>>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum MemorySize {
+    Bytes(u64),
+    Text(String),
 }
 
 #[derive(Deserialize, Clone, Debug)]
@@ -155,9 +166,23 @@ pub fn run(args: &Settings, progress: &Progress) -> Result<(), Failure> {
         report::write(paths, &title, &records)?;
     }
 
+    let cache_memory_bytes = match (args.cache_memory_bytes, &file.cache_memory) {
+        (Some(bytes), _) => bytes,
+        (None, Some(size)) => match size.get_ref() {
+            MemorySize::Bytes(bytes) => *bytes,
+            MemorySize::Text(size_text) => crate::cache::parse_bytes(size_text).map_err(|e| {
+                Failure::input(anyhow::anyhow!(
+                    "{}:{}: cache_memory: {e}",
+                    args.jobs.display(),
+                    line_of(&text, size.span().start)
+                ))
+            })?,
+        },
+        (None, None) => crate::cache::DEFAULT_BUDGET_BYTES,
+    };
     let overall = progress.stage("batch", selected.len() as u64, "jobs");
     overall.inc(records.len() as u64);
-    let mut runner = Runner::batch();
+    let mut runner = Runner::batch_within(cache_memory_bytes);
     for &index in &selected {
         if records.iter().any(|r| r.index == index) {
             continue;

@@ -168,6 +168,10 @@ pub struct BatchArgs {
     /// Skip the jobs the manifest records as finished (a killed batch's manifest lists them).
     #[arg(long)]
     pub resume: bool,
+    /// Most memory the caches kept between jobs may hold, e.g. 512MiB (over the jobs file's
+    /// cache_memory; default 2 GiB).
+    #[arg(long, value_parser = crate::cache::parse_bytes)]
+    pub cache_memory: Option<u64>,
 }
 
 #[derive(Args, Debug)]
@@ -255,6 +259,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
                 shard: args.shard,
                 report: args.report,
                 resume: args.resume,
+                cache_memory_bytes: args.cache_memory,
             };
             batch::run(&settings, &progress)
         }

@@ -3,7 +3,6 @@
 //! images. A single `render` or `solve` is a batch of one; a batch reuses form factors and solutions
 //! between its jobs. `Failure` carries the exit code each error type chooses (`From` impls).
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -11,6 +10,7 @@ use std::time::Instant;
 use anyhow::Context;
 
 use crate::accel::Accel;
+use crate::cache::Lru;
 use crate::compare::CompareError;
 use crate::film::{self, Image};
 use crate::material::SceneTextures;
@@ -150,8 +150,8 @@ pub struct Outcome {
 /// Runs jobs one after another, keeping for the later ones what they may reuse.
 pub struct Runner {
     reuse: Reuse,
-    /// Solutions by `PassOneMethod::solution_key`; only kept across jobs.
-    solutions: Option<HashMap<u64, Arc<Solution>>>,
+    /// Solutions by `PassOneMethod::solution_key`, least recently used out; only kept across jobs.
+    solutions: Option<Lru<Arc<Solution>>>,
 }
 
 impl Runner {
@@ -160,9 +160,20 @@ impl Runner {
         Runner { reuse: Reuse::none(), solutions: None }
     }
 
-    /// A runner for a batch: form factors and solutions are shared between jobs.
+    /// A runner for a batch: form factors and solutions are shared between jobs, within the default
+    /// cache budget.
     pub fn batch() -> Self {
-        Runner { reuse: Reuse::across_jobs(), solutions: Some(HashMap::new()) }
+        Runner::batch_within(crate::cache::DEFAULT_BUDGET_BYTES)
+    }
+
+    /// A runner for a batch whose caches hold at most `cache_memory_bytes`: three quarters for form
+    /// factors, one quarter for solutions, each least recently used out.
+    pub fn batch_within(cache_memory_bytes: u64) -> Self {
+        let solutions_bytes = cache_memory_bytes / 4;
+        Runner {
+            reuse: Reuse::across_jobs_within(cache_memory_bytes - solutions_bytes),
+            solutions: Some(Lru::new(solutions_bytes)),
+        }
     }
 
     /// Runs one job; `outcome.stats` holds what was measured, also when the job fails part-way.
@@ -206,8 +217,8 @@ impl Runner {
         }
         let method = method::for_params(&scene.radiosity);
         let key = self.solutions.as_ref().map(|_| method.solution_key(scene, &mesh));
-        if let (Some(solutions), Some(key)) = (&self.solutions, key) {
-            if let Some(solution) = solutions.get(&key) {
+        if let (Some(solutions), Some(key)) = (&mut self.solutions, key) {
+            if let Some(solution) = solutions.get(key) {
                 outcome.reused_solution = true;
                 outcome.reused_form_factors = true;
                 return Ok((mesh, solution.clone()));
@@ -222,7 +233,7 @@ impl Runner {
         outcome.reused_form_factors = done.reused_form_factors;
         let solution = Arc::new(done.solution);
         if let (Some(solutions), Some(key)) = (&mut self.solutions, key) {
-            solutions.insert(key, solution.clone());
+            solutions.insert(key, solution.clone(), solution.memory_bytes());
         }
         Ok((done.mesh, solution))
     }

@@ -198,3 +198,97 @@ fn report_path_that_cannot_be_written_is_refused_before_any_work() {
     assert!(stderr(&out).contains("must end in .html"), "{}", stderr(&out));
     assert!(!dir.path().join("a.png").exists() && !dir.path().join("jobs.manifest.json").exists());
 }
+
+/// `n` quick jobs of one scene, each from another eye point (one solve, then reused).
+fn view_jobs(n: usize, width: u32) -> String {
+    let s = scene("cornell_box.toml");
+    (0..n)
+        .map(|i| {
+            let eye = format!("camera = {{ eye = [{}.0, 273.0, -800.0] }}\nwidth = {width}", 200 + 10 * i);
+            job(&s, &format!("view{i}.png"), &eye).replace("width = 16\n", "")
+        })
+        .collect()
+}
+
+fn manifest_jobs(path: &Path) -> Vec<serde_json::Value> {
+    let m: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    m["jobs"].as_array().unwrap().clone()
+}
+
+#[test]
+fn resume_after_a_kill_skips_the_finished_jobs_and_refuses_another_jobs_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let jobs_path = dir.path().join("jobs.toml");
+    let manifest = dir.path().join("jobs.manifest.json");
+    let count = 40;
+    std::fs::write(&jobs_path, view_jobs(count, 16)).unwrap();
+
+    // A real kill: SIGKILL as soon as the manifest records a finished job.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_radray"))
+        .args(["--quiet", "--threads", "1", "batch", jobs_path.to_str().unwrap()])
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    while std::time::Instant::now() < deadline {
+        // Every read sees a whole manifest: it is replaced by a rename, never written in place.
+        if manifest.is_file() && !manifest_jobs(&manifest).is_empty() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let before = manifest_jobs(&manifest);
+    assert!(!before.is_empty(), "the batch recorded a job before the kill");
+    assert!(before.iter().all(|j| j["status"] == "ok" && j["outputs"].as_array().unwrap().len() == 1));
+    let done: HashSet<u64> = before.iter().map(|j| j["index"].as_u64().unwrap()).collect();
+
+    let out = radray(&["batch", jobs_path.to_str().unwrap(), "--resume"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains(&format!("resuming: {} of {count} jobs finished", done.len())), "{}", stderr(&out));
+    let after = manifest_jobs(&manifest);
+    assert_eq!(after.len(), count);
+    for (i, record) in after.iter().enumerate() {
+        assert_eq!(record["index"].as_u64(), Some(i as u64));
+        assert_eq!(record["from_earlier_run"].as_bool().unwrap_or(false), done.contains(&(i as u64)), "job {i}");
+        assert!(dir.path().join(format!("view{i}.png")).is_file());
+    }
+
+    // A manifest with some jobs done, from the first jobs of the same file: those are skipped.
+    let partial = dir.path().join("partial.toml");
+    std::fs::write(&partial, view_jobs(3, 16)).unwrap();
+    let m2 = dir.path().join("m2.json");
+    let out = radray(&["batch", partial.to_str().unwrap(), "--manifest", m2.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::write(&partial, view_jobs(5, 16)).unwrap();
+    let out = radray(&["batch", partial.to_str().unwrap(), "--manifest", m2.to_str().unwrap(), "--resume"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let resumed: Vec<bool> =
+        manifest_jobs(&m2).iter().map(|j| j["from_earlier_run"].as_bool().unwrap_or(false)).collect();
+    assert_eq!(resumed, vec![true, true, true, false, false]);
+
+    // The jobs file changed under the manifest (job 0's width): refused, nothing run.
+    std::fs::write(&partial, view_jobs(5, 20)).unwrap();
+    let out = radray(&["batch", partial.to_str().unwrap(), "--manifest", m2.to_str().unwrap(), "--resume"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("does not match") && stderr(&out).contains("job 0"), "{}", stderr(&out));
+    assert_eq!(manifest_jobs(&m2).len(), 5, "the refused resume left the manifest alone");
+}
+
+#[test]
+fn cache_memory_is_read_from_the_jobs_file_with_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let jobs_path = dir.path().join("jobs.toml");
+    std::fs::write(&jobs_path, format!("cache_memory = \"64 MiB\"\n{}", view_jobs(2, 16))).unwrap();
+    let out = radray(&["batch", jobs_path.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(manifest_jobs(&dir.path().join("jobs.manifest.json"))[1]["reused_solution"], true);
+    // No room at all: every job solves again.
+    let out = radray(&["batch", jobs_path.to_str().unwrap(), "--cache-memory", "0"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(manifest_jobs(&dir.path().join("jobs.manifest.json"))[1]["reused_solution"], false);
+    std::fs::write(&jobs_path, format!("\ncache_memory = \"lots\"\n{}", view_jobs(1, 16))).unwrap();
+    let out = radray(&["batch", jobs_path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("jobs.toml:2: cache_memory"), "{}", stderr(&out));
+}
