@@ -83,6 +83,8 @@ struct JobEntry {
     materials: HashMap<String, MaterialOverride>,
     /// An image (EXR, or PNG read as sRGB) the report compares this job's images with.
     reference: Option<PathBuf>,
+    /// A layered EXR to write as well (`render --layers`).
+    layers: Option<PathBuf>,
 }
 
 impl From<manifest::ResumeError> for Failure {
@@ -193,12 +195,13 @@ pub fn run(args: &Settings, progress: &Progress) -> Result<(), Failure> {
         let mut outcome = Outcome::default();
         let mut report_images = None;
         let result = job_of(entry, &base).and_then(|mut job| {
-            let own_outputs = plan_len(&job);
             if let (Some(paths), Work::Render { plan, .. }) = (&report, &mut job.work) {
                 plan.extend(paths.plan(index));
             }
             runner.run(&job, progress, &mut outcome)?;
-            outcome.written.truncate(own_outputs);
+            if let Some(paths) = &report {
+                outcome.written.retain(|p| !p.starts_with(&paths.files));
+            }
             if let (Some(paths), Work::Render { png, .. }) = (&report, &job.work) {
                 let reference = entry.reference.as_ref().map(|r| base.join(r));
                 report_images = Some(report::job_images(paths, index, png, reference.as_deref())?);
@@ -252,14 +255,6 @@ pub fn run(args: &Settings, progress: &Progress) -> Result<(), Failure> {
     Ok(())
 }
 
-/// How many outputs the job itself asks for (before the report's are added).
-fn plan_len(job: &Job) -> usize {
-    match &job.work {
-        Work::Render { plan, .. } => plan.len(),
-        Work::Solve { .. } => 1,
-    }
-}
-
 /// The `run::Job` of a `[[job]]`: paths relative to the jobs file, the output plan checked before any
 /// work, materials in name order (so that the first unknown one is always the one reported).
 fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
@@ -282,6 +277,10 @@ fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
         materials,
     };
     let png = PngSettings { exposure_stops: entry.exposure.unwrap_or(0.0), tone: entry.tone.unwrap_or_default() };
+    let layers = entry.layers.as_ref().map(|p| base.join(p));
+    if let Some(path) = &layers {
+        run::check_layers_path(path)?;
+    }
     if let Some(reference) = &entry.reference {
         let path = base.join(reference);
         crate::output::ImageFormat::from_path(&path)?;
@@ -289,5 +288,5 @@ fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
             return Err(Failure::input(anyhow::anyhow!("reference {}: no such file", path.display())));
         }
     }
-    Ok(Job { scene: base.join(&entry.scene), overrides, work: Work::Render { plan, png, solution: None } })
+    Ok(Job { scene: base.join(&entry.scene), overrides, work: Work::Render { plan, png, solution: None, layers } })
 }

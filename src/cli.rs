@@ -114,6 +114,10 @@ pub struct RenderArgs {
     /// Write what the run measured as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Also write a layered EXR: beauty RGB plus direct, indirect, specular, emitted, radiosity,
+    /// albedo, normal and depth layers.
+    #[arg(long)]
+    pub layers: Option<PathBuf>,
     #[command(flatten)]
     pub overrides: OverrideArgs,
 }
@@ -269,10 +273,18 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
 
 fn render_command(args: &RenderArgs, progress: &Progress) -> Result<(), Failure> {
     let plan = run::output_plan(&args.output, args.mode)?;
+    if let Some(path) = &args.layers {
+        run::check_layers_path(path)?;
+    }
     let job = Job {
         scene: args.scene.clone(),
         overrides: args.overrides.scene_overrides(),
-        work: Work::Render { plan, png: args.overrides.png(), solution: args.solution.clone() },
+        work: Work::Render {
+            plan,
+            png: args.overrides.png(),
+            solution: args.solution.clone(),
+            layers: args.layers.clone(),
+        },
     };
     let mut outcome = Outcome::default();
     Runner::single().run(&job, progress, &mut outcome)?;

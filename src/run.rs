@@ -9,6 +9,10 @@ use std::time::Instant;
 
 use anyhow::Context;
 
+mod layers;
+
+pub use layers::check_layers_path;
+
 use crate::accel::Accel;
 use crate::cache::Lru;
 use crate::compare::CompareError;
@@ -123,8 +127,9 @@ pub struct PngSettings {
 /// What a job makes.
 #[derive(Clone, Debug)]
 pub enum Work {
-    /// Images, one per planned output (from `output_plan`), from a solved or a loaded solution.
-    Render { plan: Vec<(TraceMode, PathBuf)>, png: PngSettings, solution: Option<PathBuf> },
+    /// Images, one per planned output (from `output_plan`), from a solved or a loaded solution, and
+    /// a layered EXR (`layers::write_layers`) when `layers` names one.
+    Render { plan: Vec<(TraceMode, PathBuf)>, png: PngSettings, solution: Option<PathBuf>, layers: Option<PathBuf> },
     /// The solution file.
     Solve { output: PathBuf },
 }
@@ -191,9 +196,13 @@ impl Runner {
                 solution.save(output)?;
                 outcome.written.push(output.clone());
             }
-            Work::Render { plan, png, .. } => {
+            Work::Render { plan, png, layers, .. } => {
                 outcome.written =
                     render_plan(&scene, &mesh, &solution, plan, png, &photons, progress, &mut outcome.stats)?;
+                if let Some(path) = layers {
+                    layers::write_layers(&scene, &mesh, &solution, path, &photons, progress, &mut outcome.stats)?;
+                    outcome.written.push(path.clone());
+                }
             }
         }
         Ok(())
@@ -388,18 +397,7 @@ pub fn render(
 ) -> Result<Image, TraceError> {
     let image = &scene.image;
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
-    let pixel_angle_rad = scene.camera.vfov_deg.to_radians() / image.height_px.max(1) as f32;
-    let tracer = Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?
-        .with_shading_normals(&scene.surfaces)
-        .with_pixel_angle(pixel_angle_rad);
-    let caustics = match mode {
-        TraceMode::Final => photons.get(mesh, accel, &scene.materials, &scene.surfaces),
-        TraceMode::Radiosity => None,
-    };
-    let tracer = match caustics {
-        Some(photons) => tracer.with_caustics(photons),
-        None => tracer,
-    };
+    let tracer = tracer_for(scene, mesh, accel, solution, mode, photons)?;
     let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
     let stage = progress.stage(
         if mode == TraceMode::Final { "render final" } else { "render radiosity" },
@@ -436,6 +434,30 @@ pub fn render(
         rays as f64 / seconds.max(1e-9) / 1e6
     ));
     Ok(picture)
+}
+
+/// Pass two's tracer for a scene, its mesh and solution: smooth-shading normals, the texture
+/// footprint of one pixel, and the run's `photons` as caustics in the final mode.
+pub fn tracer_for<'a>(
+    scene: &'a SceneDescription,
+    mesh: &'a Mesh,
+    accel: &'a Accel,
+    solution: &'a Solution,
+    mode: TraceMode,
+    photons: &RunPhotons,
+) -> Result<Tracer<'a>, TraceError> {
+    let pixel_angle_rad = scene.camera.vfov_deg.to_radians() / scene.image.height_px.max(1) as f32;
+    let tracer = Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?
+        .with_shading_normals(&scene.surfaces)
+        .with_pixel_angle(pixel_angle_rad);
+    let caustics = match mode {
+        TraceMode::Final => photons.get(mesh, accel, &scene.materials, &scene.surfaces),
+        TraceMode::Radiosity => None,
+    };
+    Ok(match caustics {
+        Some(photons) => tracer.with_caustics(photons),
+        None => tracer,
+    })
 }
 
 /// Peak resident memory of this process so far (Linux `VmHWM`), 0 if unknown.

@@ -13,7 +13,10 @@ pub use filter::{
 };
 pub use image::{luminance, Image};
 pub use sampler::{multi_jittered, stratum_grid, Sampler};
-pub use tiles::{luminance_contrast, render, render_with, FilmStats, ADAPTIVE_CONTRAST_EPSILON, TILE_SIZE_PX};
+pub use tiles::{
+    luminance_contrast, render, render_samples_with, render_with, FilmSample, FilmStats, ADAPTIVE_CONTRAST_EPSILON,
+    TILE_SIZE_PX,
+};
 
 use crate::scene::ImageSettings;
 

@@ -6,10 +6,12 @@
 pub mod camera;
 pub mod caustics;
 pub mod diffuse;
+pub mod parts;
 pub mod whitted;
 
 pub use camera::PinholeCamera;
 pub use diffuse::{Diffuse, DiffuseEstimator};
+pub use parts::RadianceParts;
 pub use whitted::{RayCounts, TraceError, TraceMode, Tracer};
 
 use glam::Vec3;
