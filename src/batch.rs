@@ -6,7 +6,7 @@
 //! after every job (`manifest`), so `--resume` can skip what a killed batch finished; `--report`
 //! writes the HTML comparison page (`report`).
 
-use crate::output::ToneCurve;
+use crate::output::{Exposure, ToneCurve};
 use crate::progress::Progress;
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
 use crate::scene::overrides::{CameraOverride, MaterialOverride};
@@ -75,7 +75,7 @@ struct JobEntry {
     seed: Option<u64>,
     direct: Option<DirectMode>,
     quality: Option<Quality>,
-    exposure: Option<f32>,
+    exposure: Option<Exposure>,
     tone: Option<ToneCurve>,
     camera: Option<CameraOverride>,
     /// Per material name: new `kd`, `ke` or `ks` (re-solves from cached form factors).
@@ -276,7 +276,7 @@ fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
         camera: entry.camera.clone(),
         materials,
     };
-    let png = PngSettings { exposure_stops: entry.exposure.unwrap_or(0.0), tone: entry.tone.unwrap_or_default() };
+    let png = PngSettings { exposure: entry.exposure, tone: entry.tone.unwrap_or_default() };
     let layers = entry.layers.as_ref().map(|p| base.join(p));
     if let Some(path) = &layers {
         run::check_layers_path(path)?;

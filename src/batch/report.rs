@@ -140,7 +140,8 @@ pub fn job_images(
         Some(source) => {
             let reference_image = output::read_image(source)?;
             let reference_path = paths.image(index, "reference", "png");
-            output::write_png(&reference_image, &reference_path, png.exposure_stops, png.tone)?;
+            let stops = png.exposure.unwrap_or(output::Exposure::Stops(0.0)).stops_for(&final_image);
+            output::write_png(&reference_image, &reference_path, stops, png.tone)?;
             let mut images = ReferenceImages {
                 source: source.display().to_string(),
                 reference_png: href(reference_path),
