@@ -12,6 +12,7 @@ Examples:
   radray render scenes/cornell_box.toml --solution cornell.radsol -o view.exr --width 512 --height 512
   radray compare out.exr references/cornell_original/reference.exr --diff diff.png --json
   radray batch jobs.toml --manifest jobs.manifest.json --shard 0/4
+  radray batch jobs.toml --report report.html --resume
   radray info scenes/cornell_box.toml
 
 Exit codes: 0 success, 2 bad input or usage, 1 internal error.";
@@ -114,6 +115,10 @@ pub struct RenderArgs {
     /// Write what the run measured as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Also write a layered EXR: beauty RGB plus direct, indirect, specular, emitted, radiosity,
+    /// albedo, normal and depth layers.
+    #[arg(long)]
+    pub layers: Option<PathBuf>,
     #[command(flatten)]
     pub overrides: OverrideArgs,
 }
@@ -162,6 +167,16 @@ pub struct BatchArgs {
     /// Run every N-th job starting at K (0-based): K/N.
     #[arg(long)]
     pub shard: Option<String>,
+    /// Write an HTML page comparing each job's final, radiosity and reference images.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Skip the jobs the manifest records as finished (a killed batch's manifest lists them).
+    #[arg(long)]
+    pub resume: bool,
+    /// Most memory the caches kept between jobs may hold, e.g. 512MiB (over the jobs file's
+    /// cache_memory; default 2 GiB).
+    #[arg(long, value_parser = crate::cache::parse_bytes)]
+    pub cache_memory: Option<u64>,
 }
 
 #[derive(Args, Debug)]
@@ -243,7 +258,15 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Solve(args) => solve_command(&args, &progress),
         Command::Compare(args) => compare_command(&args),
         Command::Batch(args) => {
-            batch::run(&batch::Settings { jobs: args.jobs, manifest: args.manifest, shard: args.shard }, &progress)
+            let settings = batch::Settings {
+                jobs: args.jobs,
+                manifest: args.manifest,
+                shard: args.shard,
+                report: args.report,
+                resume: args.resume,
+                cache_memory_bytes: args.cache_memory,
+            };
+            batch::run(&settings, &progress)
         }
         Command::Info(args) => info_command(&args),
     })
@@ -251,10 +274,18 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
 
 fn render_command(args: &RenderArgs, progress: &Progress) -> Result<(), Failure> {
     let plan = run::output_plan(&args.output, args.mode)?;
+    if let Some(path) = &args.layers {
+        run::check_layers_path(path)?;
+    }
     let job = Job {
         scene: args.scene.clone(),
         overrides: args.overrides.scene_overrides(),
-        work: Work::Render { plan, png: args.overrides.png(), solution: args.solution.clone() },
+        work: Work::Render {
+            plan,
+            png: args.overrides.png(),
+            solution: args.solution.clone(),
+            layers: args.layers.clone(),
+        },
     };
     let mut outcome = Outcome::default();
     Runner::single().run(&job, progress, &mut outcome)?;

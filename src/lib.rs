@@ -6,6 +6,7 @@
 
 pub mod accel;
 pub mod batch;
+pub mod cache;
 pub mod cli;
 pub mod compare;
 pub mod film;

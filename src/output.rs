@@ -1,6 +1,10 @@
 //! Writing and reading images (the only user of `image` and `exr`), and atomic file writes: every
 //! output goes to a temporary file beside its target and is renamed into place only when complete.
 
+mod layers;
+
+pub use layers::{read_exr_channels, write_layered_exr, Layers};
+
 use crate::film::Image;
 use glam::Vec3;
 use std::io::{Cursor, Write};

@@ -3,14 +3,18 @@
 //! images. A single `render` or `solve` is a batch of one; a batch reuses form factors and solutions
 //! between its jobs. `Failure` carries the exit code each error type chooses (`From` impls).
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context;
 
+mod layers;
+
+pub use layers::check_layers_path;
+
 use crate::accel::Accel;
+use crate::cache::Lru;
 use crate::compare::CompareError;
 use crate::film::{self, Image};
 use crate::material::SceneTextures;
@@ -124,8 +128,9 @@ pub struct PngSettings {
 /// What a job makes.
 #[derive(Clone, Debug)]
 pub enum Work {
-    /// Images, one per planned output (from `output_plan`), from a solved or a loaded solution.
-    Render { plan: Vec<(TraceMode, PathBuf)>, png: PngSettings, solution: Option<PathBuf> },
+    /// Images, one per planned output (from `output_plan`), from a solved or a loaded solution, and
+    /// a layered EXR (`layers::write_layers`) when `layers` names one.
+    Render { plan: Vec<(TraceMode, PathBuf)>, png: PngSettings, solution: Option<PathBuf>, layers: Option<PathBuf> },
     /// The solution file.
     Solve { output: PathBuf },
 }
@@ -151,8 +156,8 @@ pub struct Outcome {
 /// Runs jobs one after another, keeping for the later ones what they may reuse.
 pub struct Runner {
     reuse: Reuse,
-    /// Solutions by `PassOneMethod::solution_key`; only kept across jobs.
-    solutions: Option<HashMap<u64, Arc<Solution>>>,
+    /// Solutions by `PassOneMethod::solution_key`, least recently used out; only kept across jobs.
+    solutions: Option<Lru<Arc<Solution>>>,
 }
 
 impl Runner {
@@ -161,9 +166,20 @@ impl Runner {
         Runner { reuse: Reuse::none(), solutions: None }
     }
 
-    /// A runner for a batch: form factors and solutions are shared between jobs.
+    /// A runner for a batch: form factors and solutions are shared between jobs, within the default
+    /// cache budget.
     pub fn batch() -> Self {
-        Runner { reuse: Reuse::across_jobs(), solutions: Some(HashMap::new()) }
+        Runner::batch_within(crate::cache::DEFAULT_BUDGET_BYTES)
+    }
+
+    /// A runner for a batch whose caches hold at most `cache_memory_bytes`: three quarters for form
+    /// factors, one quarter for solutions, each least recently used out.
+    pub fn batch_within(cache_memory_bytes: u64) -> Self {
+        let solutions_bytes = cache_memory_bytes / 4;
+        Runner {
+            reuse: Reuse::across_jobs_within(cache_memory_bytes - solutions_bytes),
+            solutions: Some(Lru::new(solutions_bytes)),
+        }
     }
 
     /// Runs one job; `outcome.stats` holds what was measured, also when the job fails part-way.
@@ -181,9 +197,13 @@ impl Runner {
                 solution.save(output)?;
                 outcome.written.push(output.clone());
             }
-            Work::Render { plan, png, .. } => {
+            Work::Render { plan, png, layers, .. } => {
                 outcome.written =
                     render_plan(&scene, &mesh, &solution, plan, png, &photons, progress, &mut outcome.stats)?;
+                if let Some(path) = layers {
+                    layers::write_layers(&scene, &mesh, &solution, path, &photons, progress, &mut outcome.stats)?;
+                    outcome.written.push(path.clone());
+                }
             }
         }
         Ok(())
@@ -207,8 +227,8 @@ impl Runner {
         }
         let method = method::for_params(&scene.radiosity);
         let key = self.solutions.as_ref().map(|_| method.solution_key(scene, &mesh));
-        if let (Some(solutions), Some(key)) = (&self.solutions, key) {
-            if let Some(solution) = solutions.get(&key) {
+        if let (Some(solutions), Some(key)) = (&mut self.solutions, key) {
+            if let Some(solution) = solutions.get(key) {
                 outcome.reused_solution = true;
                 outcome.reused_form_factors = true;
                 return Ok((mesh, solution.clone()));
@@ -223,7 +243,7 @@ impl Runner {
         outcome.reused_form_factors = done.reused_form_factors;
         let solution = Arc::new(done.solution);
         if let (Some(solutions), Some(key)) = (&mut self.solutions, key) {
-            solutions.insert(key, solution.clone());
+            solutions.insert(key, solution.clone(), solution.memory_bytes());
         }
         Ok((done.mesh, solution))
     }
@@ -400,18 +420,7 @@ pub fn render(
 ) -> Result<Image, TraceError> {
     let image = &scene.image;
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
-    let pixel_angle_rad = scene.camera.vfov_deg.to_radians() / image.height_px.max(1) as f32;
-    let tracer = Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?
-        .with_shading_normals(&scene.surfaces)
-        .with_pixel_angle(pixel_angle_rad);
-    let caustics = match mode {
-        TraceMode::Final => photons.get(mesh, accel, &scene.materials, &scene.surfaces),
-        TraceMode::Radiosity => None,
-    };
-    let tracer = match caustics {
-        Some(photons) => tracer.with_caustics(photons),
-        None => tracer,
-    };
+    let tracer = tracer_for(scene, mesh, accel, solution, mode, photons)?;
     let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
     let stage = progress.stage(
         if mode == TraceMode::Final { "render final" } else { "render radiosity" },
@@ -448,6 +457,30 @@ pub fn render(
         rays as f64 / seconds.max(1e-9) / 1e6
     ));
     Ok(picture)
+}
+
+/// Pass two's tracer for a scene, its mesh and solution: smooth-shading normals, the texture
+/// footprint of one pixel, and the run's `photons` as caustics in the final mode.
+pub fn tracer_for<'a>(
+    scene: &'a SceneDescription,
+    mesh: &'a Mesh,
+    accel: &'a Accel,
+    solution: &'a Solution,
+    mode: TraceMode,
+    photons: &RunPhotons,
+) -> Result<Tracer<'a>, TraceError> {
+    let pixel_angle_rad = scene.camera.vfov_deg.to_radians() / scene.image.height_px.max(1) as f32;
+    let tracer = Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?
+        .with_shading_normals(&scene.surfaces)
+        .with_pixel_angle(pixel_angle_rad);
+    let caustics = match mode {
+        TraceMode::Final => photons.get(mesh, accel, &scene.materials, &scene.surfaces),
+        TraceMode::Radiosity => None,
+    };
+    Ok(match caustics {
+        Some(photons) => tracer.with_caustics(photons),
+        None => tracer,
+    })
 }
 
 /// Peak resident memory of this process so far (Linux `VmHWM`), 0 if unknown.

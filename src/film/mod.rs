@@ -15,7 +15,10 @@ pub use image::{luminance, Image};
 pub use sampler::{
     multi_jittered, owen_scramble, owen_sobol_2d, sobol_2d_bits, stratum_grid, Pattern2d, PixelSampler, Sampler,
 };
-pub use tiles::{luminance_contrast, render, render_with, FilmStats, ADAPTIVE_CONTRAST_EPSILON, TILE_SIZE_PX};
+pub use tiles::{
+    luminance_contrast, render, render_samples_with, render_with, FilmSample, FilmStats, ADAPTIVE_CONTRAST_EPSILON,
+    TILE_SIZE_PX,
+};
 
 use crate::scene::ImageSettings;
 

@@ -18,16 +18,43 @@ pub const ADAPTIVE_CONTRAST_EPSILON: f32 = 1e-4;
 /// Whitted's (1980) adaptive criterion as a contrast of the samples' luminances Y (negatives clamped
 /// to 0): (max Y − min Y) / (max Y + min Y + ε), ε = [`ADAPTIVE_CONTRAST_EPSILON`]; 0 for no samples.
 pub fn luminance_contrast(radiance: &[Vec3]) -> f32 {
-    if radiance.is_empty() {
+    contrast(radiance)
+}
+
+/// [`luminance_contrast`] of the samples' radiance.
+fn contrast<T: FilmSample>(samples: &[T]) -> f32 {
+    if samples.is_empty() {
         return 0.0;
     }
     let (mut lo, mut hi) = (f32::INFINITY, 0f32);
-    for l in radiance {
-        let y = luminance(*l).max(0.0);
+    for l in samples {
+        let y = luminance(l.radiance()).max(0.0);
         lo = lo.min(y);
         hi = hi.max(y);
     }
     (hi - lo) / (hi + lo + ADAPTIVE_CONTRAST_EPSILON)
+}
+
+/// What the film takes per sample and develops per pixel: radiance (`Vec3`), or radiance with other
+/// values that are filtered the same way (`trace::RadianceParts`, the layers of a layered EXR).
+pub trait FilmSample: Copy + Default + Send {
+    /// The radiance that adaptive sampling and the finiteness check look at.
+    fn radiance(&self) -> Vec3;
+    /// The pixel from its finite samples and their filter weights, as [`reconstruct_pixel`]: every
+    /// value Σ wᵢ·xᵢ / Σ wᵢ (the unweighted mean when Σ wᵢ ≤ 0; no samples give zero).
+    fn reconstruct(samples: &[Self], weights: &[f32]) -> Self;
+}
+
+impl FilmSample for Vec3 {
+    #[inline]
+    fn radiance(&self) -> Vec3 {
+        *self
+    }
+
+    #[inline]
+    fn reconstruct(samples: &[Vec3], weights: &[f32]) -> Vec3 {
+        reconstruct_pixel(samples, weights)
+    }
 }
 
 /// What the film spent.
@@ -83,10 +110,26 @@ where
     I: Fn() -> S + Sync,
     F: Fn(&mut S, f32, f32, &mut Sampler) -> Vec3 + Sync,
 {
+    let (pixels, stats, states) = render_samples_with(settings, init, shade, on_tile_done);
+    (Image { width_px: settings.width_px, height_px: settings.height_px, pixels }, stats, states)
+}
+
+/// [`render_with`] for any [`FilmSample`]: the pixels row-major from the top-left.
+pub fn render_samples_with<T, S, I, F>(
+    settings: &ImageSettings,
+    init: I,
+    shade: F,
+    on_tile_done: &(dyn Fn() + Sync),
+) -> (Vec<T>, FilmStats, Vec<S>)
+where
+    T: FilmSample,
+    S: Send,
+    I: Fn() -> S + Sync,
+    F: Fn(&mut S, f32, f32, &mut Sampler) -> T + Sync,
+{
     let (width, height) = (settings.width_px, settings.height_px);
-    let mut image = Image::new(width, height);
     if width == 0 || height == 0 {
-        return (image, FilmStats::default(), Vec::new());
+        return (Vec::new(), FilmStats::default(), Vec::new());
     }
     let radius_px = if settings.filter_radius_px.is_finite() && settings.filter_radius_px > 0.0 {
         settings.filter_radius_px
@@ -105,7 +148,7 @@ where
     };
     let tiles_x = width.div_ceil(TILE_SIZE_PX);
     let tiles_y = height.div_ceil(TILE_SIZE_PX);
-    let folded: Vec<(S, Vec<TileResult>)> = (0..tiles_x * tiles_y)
+    let folded: Vec<(S, Vec<TileResult<T>>)> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .fold(
             || (init(), Vec::new()),
@@ -121,6 +164,7 @@ where
         )
         .collect();
 
+    let mut pixels = vec![T::default(); width as usize * height as usize];
     let mut stats = FilmStats::default();
     let mut states = Vec::with_capacity(folded.len());
     for (state, tiles) in folded {
@@ -129,21 +173,21 @@ where
             for y in t.y0..t.y1 {
                 let row = (y - t.y0) as usize * tile_width;
                 let dst = (y * width + t.x0) as usize;
-                image.pixels[dst..dst + tile_width].copy_from_slice(&t.radiance[row..row + tile_width]);
+                pixels[dst..dst + tile_width].copy_from_slice(&t.radiance[row..row + tile_width]);
             }
             stats.add(&t.stats);
         }
         states.push(state);
     }
-    (image, stats, states)
+    (pixels, stats, states)
 }
 
-struct TileResult {
+struct TileResult<T> {
     x0: u32,
     y0: u32,
     x1: u32,
     y1: u32,
-    radiance: Vec<Vec3>,
+    radiance: Vec<T>,
     stats: FilmStats,
 }
 
@@ -158,17 +202,23 @@ struct PixelPlan {
 }
 
 /// Per-tile scratch buffers.
-#[derive(Default)]
-struct PixelScratch {
+struct PixelScratch<T> {
     points: Vec<[f32; 2]>,
-    radiance: Vec<Vec3>,
+    radiance: Vec<T>,
     weights: Vec<f32>,
 }
 
+impl<T> Default for PixelScratch<T> {
+    fn default() -> Self {
+        PixelScratch { points: Vec::new(), radiance: Vec::new(), weights: Vec::new() }
+    }
+}
+
 impl PixelPlan {
-    fn render_tile<S, F>(&self, x0: u32, y0: u32, x1: u32, y1: u32, state: &mut S, shade: &F) -> TileResult
+    fn render_tile<T, S, F>(&self, x0: u32, y0: u32, x1: u32, y1: u32, state: &mut S, shade: &F) -> TileResult<T>
     where
-        F: Fn(&mut S, f32, f32, &mut Sampler) -> Vec3,
+        T: FilmSample,
+        F: Fn(&mut S, f32, f32, &mut Sampler) -> T,
     {
         let mut stats = FilmStats { tiles: 1, ..FilmStats::default() };
         let mut radiance = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
@@ -181,17 +231,18 @@ impl PixelPlan {
         TileResult { x0, y0, x1, y1, radiance, stats }
     }
 
-    fn render_pixel<S, F>(
+    fn render_pixel<T, S, F>(
         &self,
         x: u32,
         y: u32,
         state: &mut S,
         shade: &F,
-        scratch: &mut PixelScratch,
+        scratch: &mut PixelScratch<T>,
         stats: &mut FilmStats,
-    ) -> Vec3
+    ) -> T
     where
-        F: Fn(&mut S, f32, f32, &mut Sampler) -> Vec3,
+        T: FilmSample,
+        F: Fn(&mut S, f32, f32, &mut Sampler) -> T,
     {
         let pixel_index = y as u64 * self.width as u64 + x as u64;
         let mut sampler = Sampler::pixel(self.seed, pixel_index);
@@ -200,19 +251,19 @@ impl PixelPlan {
         let centre = [x as f32 + 0.5, y as f32 + 0.5];
         self.shade_batch(0, self.base_samples, centre, state, shade, &mut sampler, scratch, stats);
         if let Some((threshold, extra)) = self.adaptive {
-            if luminance_contrast(&scratch.radiance) > threshold {
+            if contrast(&scratch.radiance) > threshold {
                 self.shade_batch(self.base_samples, extra, centre, state, shade, &mut sampler, scratch, stats);
                 stats.adaptive_extra_samples += extra as u64;
                 stats.adaptive_pixels += 1;
             }
         }
-        reconstruct_pixel(&scratch.radiance, &scratch.weights)
+        T::reconstruct(&scratch.radiance, &scratch.weights)
     }
 
     /// Draws one multi-jittered batch of `count` samples, the pixel's samples `first`, `first` + 1, …,
     /// shades them and keeps the finite ones.
     #[allow(clippy::too_many_arguments)]
-    fn shade_batch<S, F>(
+    fn shade_batch<T, S, F>(
         &self,
         first: u32,
         count: u32,
@@ -220,10 +271,11 @@ impl PixelPlan {
         state: &mut S,
         shade: &F,
         sampler: &mut Sampler,
-        scratch: &mut PixelScratch,
+        scratch: &mut PixelScratch<T>,
         stats: &mut FilmStats,
     ) where
-        F: Fn(&mut S, f32, f32, &mut Sampler) -> Vec3,
+        T: FilmSample,
+        F: Fn(&mut S, f32, f32, &mut Sampler) -> T,
     {
         let (columns, rows) = stratum_grid(count);
         scratch.points.clear();
@@ -233,7 +285,7 @@ impl PixelPlan {
             let s = self.filter.sample(*u);
             let l = shade(state, centre[0] + s.offset_px[0], centre[1] + s.offset_px[1], sampler);
             stats.samples += 1;
-            if l.is_finite() {
+            if l.radiance().is_finite() {
                 scratch.radiance.push(l);
                 scratch.weights.push(s.weight);
             } else {

@@ -14,6 +14,7 @@ use super::solver;
 use super::specular::{self, SpecularPaths};
 use super::stats::PassOneStats;
 use crate::accel::Accel;
+use crate::cache::Lru;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
@@ -41,19 +42,24 @@ pub struct PassOne {
 #[derive(Debug, Default)]
 pub struct Reuse {
     keep: bool,
-    /// The most recent scene's form factors only: matrices are large.
-    form_factors: Option<(u64, Arc<FormFactors>)>,
+    /// Form factors of earlier scenes, least recently used out beyond the budget: matrices are large.
+    form_factors: Lru<Arc<FormFactors>>,
 }
 
 impl Reuse {
     /// Keeps nothing: a single run frees its matrix as soon as it is solved.
     pub fn none() -> Self {
-        Reuse { keep: false, form_factors: None }
+        Reuse { keep: false, form_factors: Lru::default() }
     }
 
-    /// Keeps the last scene's form factors for the jobs after it.
+    /// Keeps scenes' form factors for the jobs after them, within the default budget.
     pub fn across_jobs() -> Self {
-        Reuse { keep: true, form_factors: None }
+        Reuse::across_jobs_within(crate::cache::DEFAULT_BUDGET_BYTES)
+    }
+
+    /// Keeps scenes' form factors for the jobs after them, at most `budget_bytes` of them.
+    pub fn across_jobs_within(budget_bytes: u64) -> Self {
+        Reuse { keep: true, form_factors: Lru::new(budget_bytes) }
     }
 }
 
@@ -265,14 +271,17 @@ impl PassOneMethod for FullMatrix {
         let mut stats = PassOneStats { elements: mesh.elements.len(), ..Default::default() };
         // Only a batch keeps form factors, so only a batch needs their key.
         let key = reuse.keep.then(|| fingerprint::form_factor_key(&mesh, &scene.materials, &scene.radiosity));
-        let (ff, reused) = match (&reuse.form_factors, key) {
-            (Some((k, ff)), Some(key)) if *k == key => (ff.clone(), true),
-            _ => {
-                reuse.form_factors = None; // free the previous scene's matrix first
+        let cached = key.and_then(|key| reuse.form_factors.get(key).cloned());
+        let (ff, reused) = match cached {
+            Some(ff) => (ff, true),
+            None => {
+                // Free older scenes' matrices first, as far as the new one (the halved bound, as in
+                // `check_memory`) would not fit beside them.
+                reuse.form_factors.make_room(form_factor_bytes_bound(&mesh, &scene.radiosity) / 2);
                 self.check_memory(scene, &mesh)?;
                 let ff = Arc::new(self.compute_form_factors(scene, &mesh, photons, progress, &mut stats));
                 if let Some(key) = key {
-                    reuse.form_factors = Some((key, ff.clone()));
+                    reuse.form_factors.insert(key, ff.clone(), ff.memory_bytes() as u64);
                 }
                 (ff, false)
             }

@@ -134,6 +134,26 @@ impl<'a> Diffuse<'a> {
         }
     }
 
+    /// The part of `radiance` that arrived straight from the emitters (for layered output):
+    /// PixelDirect: ρ/π·E_direct; Interpolated: B_direct(p)/π, or ρ(x)·H_direct(p)/π on a textured
+    /// surface (B_direct the first-bounce exitance of pass one, H_direct its irradiance).
+    pub fn direct_radiance(
+        &self,
+        hit: &SurfaceHit,
+        reflectance: Vec3,
+        textured: bool,
+        direct_irradiance: Vec3,
+    ) -> Vec3 {
+        let textured = textured && !self.vertex_direct_irradiance.is_empty();
+        match (self.estimator, textured) {
+            (DiffuseEstimator::PixelDirect, _) => reflectance / PI * direct_irradiance,
+            (DiffuseEstimator::Interpolated, false) => hit.interpolate(&self.solution.vertex_direct_exitance) / PI,
+            (DiffuseEstimator::Interpolated, true) => {
+                reflectance * hit.interpolate(&self.vertex_direct_irradiance) / PI
+            }
+        }
+    }
+
     /// The radiosity view of a hit (`TraceMode::Radiosity`) on a surface of albedo ρ(x): B(p)/π, and on
     /// a textured surface (E + ρ(x)·H(p))/π with the interpolated irradiance H (see `radiance`), so
     /// the view of pass one shows the texture too.

@@ -9,10 +9,12 @@ pub mod caustics;
 pub mod cut_outs;
 pub mod diffuse;
 pub mod direct_light;
+pub mod parts;
 pub mod whitted;
 
 pub use camera::PinholeCamera;
 pub use diffuse::{Diffuse, DiffuseEstimator};
+pub use parts::RadianceParts;
 pub use whitted::{RayCounts, TraceError, TraceMode, Tracer};
 
 use glam::Vec3;

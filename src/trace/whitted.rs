@@ -11,6 +11,7 @@ use super::caustics::CausticMap;
 use super::cut_outs::{self, MAX_CUTOUT_CROSSINGS};
 use super::diffuse::{Diffuse, DiffuseEstimator};
 use super::direct_light::{DirectEstimate, DirectLight};
+use super::parts::{RadianceParts, Record};
 use crate::accel::Accel;
 use crate::film::Sampler;
 use crate::mesh::Mesh;
@@ -270,6 +271,33 @@ impl<'a> Tracer<'a> {
         sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Vec3 {
+        self.trace(origin, dir, mode, sampler, counts, &mut ())
+    }
+
+    /// `radiance` in the final mode, split into its parts (`RadianceParts`) for layered output; the
+    /// beauty is the same value `radiance` returns.
+    pub fn radiance_parts(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> RadianceParts {
+        let mut parts = RadianceParts::default();
+        parts.beauty = self.trace(origin, dir, TraceMode::Final, sampler, counts, &mut parts);
+        parts
+    }
+
+    /// The loop of `radiance`, recording the parts of the light into `record` when it keeps them.
+    fn trace<R: Record>(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        mode: TraceMode,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+        record: &mut R,
+    ) -> Vec3 {
         let mesh = self.mesh;
         let elements = &mesh.elements;
         let mut stack = RayStack::<STACK_SIZE>::new(origin, dir);
@@ -292,6 +320,10 @@ impl<'a> Tracer<'a> {
                 hit
             };
             let (p, facing) = (hit.position, hit.geometric_normal);
+            if let Some(parts) = record.parts().filter(|_| ray.depth == 0) {
+                parts.normal = hit.shading_normal;
+                parts.depth = distance;
+            }
 
             if let Some(element) = hit.element.map(|e| e as usize) {
                 let exitance = self.diffuse.radiosity_at(&hit);
@@ -339,10 +371,27 @@ impl<'a> Tracer<'a> {
                     caustic,
                 );
                 radiance += ray.throughput * (diffuse + emission_swap);
+                if let Some(parts) = record.parts() {
+                    if ray.depth == 0 {
+                        let emitted = elements.emission[element] / PI + emission_swap;
+                        let direct =
+                            self.diffuse.direct_radiance(&hit, reflectance, texel_albedo.is_some(), light.irradiance);
+                        parts.albedo = reflectance;
+                        parts.emitted += ray.throughput * emitted;
+                        parts.direct += ray.throughput * direct;
+                        parts.indirect += ray.throughput * (diffuse + emission_swap - emitted - direct);
+                    } else {
+                        parts.specular += ray.throughput * (diffuse + emission_swap);
+                    }
+                }
                 if let Some((_, n)) = highlight {
                     // Normalised Phong lobe: f = Ks·(n + 2)/(2π)·cosⁿα.
-                    radiance +=
+                    let lobe =
                         ray.throughput * material.specular_reflectance * ((n + 2.0) / (2.0 * PI)) * light.highlight;
+                    radiance += lobe;
+                    if let Some(parts) = record.parts() {
+                        parts.specular += lobe;
+                    }
                 }
             } else if mode == TraceMode::Radiosity || !material.is_dielectric() {
                 // Back of a one-sided surface: black, and the path ends (a dielectric is still
