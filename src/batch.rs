@@ -8,7 +8,7 @@ use crate::output::ToneCurve;
 use crate::progress::Progress;
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, RunStats, Runner, Work};
 use crate::scene::overrides::{CameraOverride, MaterialOverride};
-use crate::scene::{DirectMode, Overrides, Quality};
+use crate::scene::{DirectMode, MethodChoice, Overrides, Quality};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -53,6 +53,9 @@ struct JobEntry {
     seed: Option<u64>,
     direct: Option<DirectMode>,
     quality: Option<Quality>,
+    /// The pass-one method, as the scene's `[radiosity] method`.
+    #[serde(default)]
+    method: Option<MethodChoice>,
     exposure: Option<f32>,
     tone: Option<ToneCurve>,
     camera: Option<CameraOverride>,
@@ -181,6 +184,7 @@ fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
         seed: entry.seed,
         direct: entry.direct,
         quality: entry.quality,
+        method: entry.method,
         camera: entry.camera.clone(),
         materials,
     };

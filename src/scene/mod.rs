@@ -123,6 +123,99 @@ pub struct RadiosityParams {
     /// Rotate each hemicube by a seeded random angle about its normal (against aliasing).
     pub rotate_hemicubes: bool,
     pub seed: u64,
+    /// Which pass-one method solves the scene (`method`).
+    pub method: MethodChoice,
+    /// Settings of the hierarchical method (`memory`, `error_threshold`, `min_element_size`, …).
+    pub hierarchy: HierarchySettings,
+}
+
+/// Which pass-one method solves the scene (`[radiosity] method`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MethodChoice {
+    /// The full matrix (or matrix-free shooting with `store_form_factors = false`) when its predicted
+    /// matrix fits the memory budget and its predicted hemicube time is under `AUTO_MATRIX_SECONDS`;
+    /// the hierarchy otherwise.
+    #[default]
+    Auto,
+    /// The uniform mesh and the full matrix (or matrix-free shooting), whatever the scene's size.
+    Matrix,
+    /// Hierarchical radiosity with clustering and adaptive subdivision.
+    Hierarchical,
+}
+
+/// Predicted hemicube seconds above which `method = "auto"` leaves the full matrix for the hierarchy.
+pub const AUTO_MATRIX_SECONDS: f64 = 600.0;
+
+/// The scene-level settings of the hierarchical method. The solver's own parameter struct is built
+/// from these by the method (`radiosity::hierarchical`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HierarchySettings {
+    /// Memory budget of pass one in bytes (`memory = "8GB"`); also the budget `auto` holds the full
+    /// matrix to. The hierarchy's nodes and links get three quarters of it.
+    pub memory_bytes: u64,
+    /// ε: links are refined while ρ·B·ΔF exceeds ε × the mean emitted exitance.
+    pub error_threshold: f64,
+    /// Elements are not subdivided below this edge length (scene units); `None`: diagonal / 200.
+    pub min_element_size: Option<f32>,
+    /// Rays per link for visibility.
+    pub visibility_rays: u32,
+    /// Refine-and-solve passes.
+    pub refinement_passes: u32,
+}
+
+/// 8 GB, the budget for pass one.
+pub const DEFAULT_MEMORY_BYTES: u64 = 8_000_000_000;
+
+impl Default for HierarchySettings {
+    fn default() -> Self {
+        HierarchySettings {
+            memory_bytes: DEFAULT_MEMORY_BYTES,
+            error_threshold: 0.1,
+            min_element_size: None,
+            visibility_rays: 8,
+            refinement_passes: 3,
+        }
+    }
+}
+
+impl HierarchySettings {
+    /// The preset's threshold, visibility rays and passes (memory and element size untouched).
+    pub fn apply_quality(&mut self, quality: Quality) {
+        let (error_threshold, visibility_rays, refinement_passes) = match quality {
+            Quality::Preview => (0.3, 4, 2),
+            Quality::Default => (0.1, 8, 3),
+            Quality::High => (0.03, 16, 3),
+        };
+        self.error_threshold = error_threshold;
+        self.visibility_rays = visibility_rays;
+        self.refinement_passes = refinement_passes;
+    }
+}
+
+/// Parses a memory size: a whole number of bytes, or a number with a unit: `KB`, `MB`, `GB`, `TB`
+/// (powers of 1000), `KiB`, `MiB`, `GiB`, `TiB` (powers of 1024); `K`, `M`, `G`, `T` alone mean the
+/// decimal ones. Case and a space before the unit do not matter. `None` if it is not such a size or
+/// is zero.
+pub fn parse_memory_size(text: &str) -> Option<u64> {
+    let t = text.trim();
+    let split = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let number: f64 = number.parse().ok()?;
+    let scale: f64 = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1.0,
+        "k" | "kb" => 1e3,
+        "m" | "mb" => 1e6,
+        "g" | "gb" => 1e9,
+        "t" | "tb" => 1e12,
+        "kib" => 1024.0,
+        "mib" => 1024f64.powi(2),
+        "gib" => 1024f64.powi(3),
+        "tib" => 1024f64.powi(4),
+        _ => return None,
+    };
+    let bytes = number * scale;
+    (1.0..1.8e19).contains(&bytes).then_some(bytes as u64)
 }
 
 impl Default for RadiosityParams {
@@ -137,6 +230,8 @@ impl Default for RadiosityParams {
             store_form_factors: true,
             rotate_hemicubes: true,
             seed: 0,
+            method: MethodChoice::Auto,
+            hierarchy: HierarchySettings::default(),
         }
     }
 }
@@ -348,5 +443,6 @@ impl SceneDescription {
         self.image.samples_per_pixel = spp;
         self.image.adaptive_max_samples = self.image.adaptive_max_samples.max(spp);
         self.render.light_samples = light_samples;
+        self.radiosity.hierarchy.apply_quality(quality);
     }
 }
