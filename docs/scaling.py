@@ -12,45 +12,18 @@ usage: docs/scaling.py WORK_DIR [--sizes 16000,32000,...] [--timeout-s 600] [--r
 """
 
 import argparse
+import json
 import math
-import os
-import re
-import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timed_run import run_timed  # noqa: E402
+
 REPO = Path(__file__).resolve().parent.parent
 BEGIN, END = "<!-- HIERARCHY-SCALING BEGIN -->", "<!-- HIERARCHY-SCALING END -->"
-
-
-def run_timed(cmd, timeout_s):
-    """(exit code or "timeout", wall s, CPU s, peak RSS bytes) of cmd under /usr/bin/time -v."""
-    start = time.time()
-    p = subprocess.Popen(["/usr/bin/time", "-v", *cmd], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                         text=True, start_new_session=True)
-    try:
-        _, err = p.communicate(timeout=timeout_s)
-        code = p.returncode
-    except subprocess.TimeoutExpired:
-        children = Path(f"/proc/{p.pid}/task/{p.pid}/children")
-        for pid in children.read_text().split() if children.exists() else []:
-            os.kill(int(pid), signal.SIGTERM)
-        try:
-            _, err = p.communicate(timeout=30)
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
-            _, err = p.communicate()
-        code = "timeout"
-
-    def field(name):
-        m = re.search(rf"{re.escape(name)}: ([^\n]+)", err)
-        return float(m.group(1)) if m else float("nan")
-
-    cpu = field("User time (seconds)") + field("System time (seconds)")
-    rss = field("Maximum resident set size (kbytes)") * 1024
-    return code, time.time() - start, cpu, rss
 
 
 def fit(xs, ys):
@@ -80,12 +53,14 @@ def main():
         d = args.work_dir / f"procedural_{n}"
         subprocess.run([str(example), str(n), str(d)], check=True, stdout=subprocess.DEVNULL)
         stats = d / "solve.json"
-        code, wall, cpu, rss = run_timed(
+        r = run_timed(
             [args.radray, "solve", str(d / "scene.toml"), "-o", str(d / "scene.radsol"), "--stats", str(stats)],
             args.timeout_s)
+        code, wall = r["exit"], r["wall_s"]
+        cpu = (r["user_s"] or math.nan) + (r["system_s"] or 0.0)
+        rss = r["peak_rss_bytes"] or math.nan
         links = elements = ""
         if code == 0 and stats.is_file():
-            import json
             h = json.loads(stats.read_text()).get("hierarchy", {})
             links, elements = h.get("links", ""), h.get("elements", "")
         rows.append((n, code, wall, cpu, rss, elements, links))

@@ -14,13 +14,11 @@ usage: docs/sponza_bench.py SPONZA_DIR WORK_DIR [--radray target/release/radray]
 
 import argparse
 import json
-import os
-import re
-import signal
-import subprocess
 import sys
-import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timed_run import run_timed  # noqa: E402
 
 KD_CAP = 0.8
 
@@ -62,46 +60,6 @@ two_sided = true
 """
 
 
-def time_v(cmd, timeout_s):
-    """Runs cmd under /usr/bin/time -v; returns wall, user, system seconds, peak RSS bytes, exit code
-    and the stderr tail."""
-    start = time.time()
-    # Its own process group, so that a timeout ends radray too (not only /usr/bin/time).
-    p = subprocess.Popen(["/usr/bin/time", "-v", *cmd], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                         text=True, start_new_session=True)
-    try:
-        _, err = p.communicate(timeout=timeout_s)
-        code = p.returncode
-    except subprocess.TimeoutExpired:
-        # End radray (the child of /usr/bin/time), so that time still reports what it used.
-        children = Path(f"/proc/{p.pid}/task/{p.pid}/children")
-        for pid in children.read_text().split() if children.exists() else []:
-            os.kill(int(pid), signal.SIGTERM)
-        try:
-            _, err = p.communicate(timeout=30)
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
-            _, err = p.communicate()
-        code = "timeout"
-    wall = time.time() - start
-
-    def field(name):
-        m = re.search(rf"{re.escape(name)}: ([^\n]+)", err)
-        return m.group(1).strip() if m else None
-
-    rss_kb = field("Maximum resident set size (kbytes)")
-    user, system = field("User time (seconds)"), field("System time (seconds)")
-    return {
-        "command": " ".join(cmd),
-        "exit": code,
-        "wall_s": round(wall, 1),
-        "user_s": float(user) if user else None,
-        "system_s": float(system) if system else None,
-        "peak_rss_bytes": int(rss_kb) * 1024 if rss_kb else None,
-        "stderr_tail": "\n".join(err.strip().splitlines()[-25:]),
-    }
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("sponza_dir", type=Path)
@@ -129,14 +87,14 @@ def main():
     radray = str(Path(args.radray).resolve())
 
     results = {"scene": str(scene), "method": args.method, "quality": args.quality}
-    results["solve"] = time_v(
+    results["solve"] = run_timed(
         [radray, "-v", "solve", str(scene), "-o", str(work / "sponza.radsol"), "--stats", str(work / "solve.json")],
         args.timeout_s,
     )
     if (work / "solve.json").is_file():
         results["solve_stats"] = json.loads((work / "solve.json").read_text())
     if not args.skip_render:
-        results["render"] = time_v(
+        results["render"] = run_timed(
             [radray, "-v", "render", str(scene), "-o", str(work / "sponza.png"), "-o", str(work / "sponza.exr"),
              "--width", "640", "--height", "360", "--stats", str(work / "render.json")],
             args.timeout_s,

@@ -20,7 +20,7 @@ use super::hierarchy::{self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyPara
 use super::leaf_mesh::{self, LeafGeometry, LeafMeshBuild};
 use super::method::{MethodError, PassOne, PassOneMethod, Reuse};
 use super::solution::Solution;
-use super::stats::{HierarchyRunStats, PassOneStats, SolveStats};
+use super::stats::{PassOneStats, SolveStats};
 use crate::accel::Accel;
 use crate::material::SceneTextures;
 use crate::mesh::Mesh;
@@ -312,7 +312,7 @@ impl PassOneMethod for Hierarchical {
             solver: Some(self.name()),
             sweeps: h.sweeps,
             solve_seconds,
-            hierarchy: Some(HierarchyRunStats::from(h)),
+            hierarchy: Some(h.clone()),
             ..Default::default()
         };
         Ok(PassOne { mesh: leaf_mesh, solution, stats, reused_form_factors: false })

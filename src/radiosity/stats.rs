@@ -38,48 +38,5 @@ pub struct PassOneStats {
     pub solve_seconds: f64,
     /// What the hierarchical method did (absent for the other methods).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub hierarchy: Option<HierarchyRunStats>,
-}
-
-/// What a hierarchical solve did, for `--stats` and manifests.
-#[derive(Clone, Debug, Default, serde::Serialize)]
-pub struct HierarchyRunStats {
-    pub input_triangles: usize,
-    pub clusters: usize,
-    /// Clusters, input triangles and their subdivisions.
-    pub nodes: usize,
-    /// Leaf elements (the mesh pass two reads; back sides of two-sided surfaces included).
-    pub elements: usize,
-    pub links: usize,
-    pub refinement_passes: u32,
-    pub refinement_rounds: u32,
-    pub sweeps: u32,
-    pub converged: bool,
-    pub links_estimated: u64,
-    /// Largest bytes of nodes and links during the solve (the budgeted part).
-    pub peak_bytes: usize,
-    /// Some refinement was refused to stay within the memory budget.
-    pub budget_exceeded: bool,
-    /// Σ of link errors (W) after each refinement pass.
-    pub error_after_pass_w: Vec<f64>,
-}
-
-impl From<&HierarchyStats> for HierarchyRunStats {
-    fn from(h: &HierarchyStats) -> Self {
-        HierarchyRunStats {
-            input_triangles: h.input_triangles,
-            clusters: h.clusters,
-            nodes: h.nodes,
-            elements: h.elements,
-            links: h.links,
-            refinement_passes: h.refinement_passes,
-            refinement_rounds: h.refinement_rounds,
-            sweeps: h.sweeps,
-            converged: h.converged,
-            links_estimated: h.links_estimated,
-            peak_bytes: h.peak_bytes,
-            budget_exceeded: h.budget_exceeded,
-            error_after_pass_w: h.error_after_pass_w.clone(),
-        }
-    }
+    pub hierarchy: Option<HierarchyStats>,
 }

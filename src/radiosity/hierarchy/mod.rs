@@ -127,8 +127,8 @@ impl HierarchyParams {
     }
 }
 
-/// What the solver did.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// What the solver did (also what `--stats` reports for a hierarchical pass one).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct HierarchyStats {
     pub input_triangles: usize,
     pub clusters: usize,
