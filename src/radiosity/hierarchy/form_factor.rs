@@ -4,7 +4,7 @@
 //! - element ← element: Lambert's exact unoccluded point-to-polygon form factor, averaged over the
 //!   receiver's three-point quadrature rule, or a 48-point rule for near pairs (`element_to_element`),
 //!   times the ray visibility fraction;
-//! - any link with a cluster at either end: the isotropic-cluster point-to-point form factor of Sillion
+//! - far links with a cluster at either end: the isotropic-cluster point-to-point form factor of Sillion
 //!   (1995) with a six-bin projected-area model of the cluster (`cluster_form_factor`), times the ray
 //!   visibility fraction;
 //! - near links with a cluster end: see `links::near_form_factor` (leaf pairs or rays).
