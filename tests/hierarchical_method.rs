@@ -185,7 +185,7 @@ fn the_fingerprint_separates_geometry_from_materials() {
     assert_ne!(geometry_key(&s, &p), geometry_key(&moved, &p));
     let finer = hierarchy_params(&{
         let mut f = s.clone();
-        f.radiosity.hierarchy.error_threshold = 0.05;
+        f.radiosity.hierarchy.error_threshold = Some(p.error_threshold / 2.0);
         f
     });
     assert_ne!(geometry_key(&s, &p), geometry_key(&s, &finer));
@@ -332,7 +332,7 @@ fn progress_on_a_non_terminal_logs_elements_links_and_memory() {
     }
     let progress = Progress::logging(Verbosity::Normal, Duration::ZERO, Arc::new(Mutex::new(Sink(lines.clone()))));
     let mut s = cornell_hierarchical();
-    s.radiosity.hierarchy.refinement_passes = 3;
+    s.radiosity.hierarchy.refinement_passes = Some(3);
     let mut stats = RunStats::default();
     run::pass_one(&s, None, &RunPhotons::default(), &progress, &mut stats).expect("solves");
     drop(progress);

@@ -26,29 +26,34 @@ use crate::material::SceneTextures;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::rng::Pcg32;
-use crate::scene::{Material, SceneDescription, SolverKind};
+use crate::scene::{Material, Quality, SceneDescription, SolverKind};
 use crate::transport::emitters::Emitters;
 use crate::transport::photons::RunPhotons;
 
 /// Shadow rays per leaf for the direct part of its exitance.
 pub const DIRECT_SAMPLES: u32 = 16;
 
-/// The hierarchy's parameters from the scene's `[radiosity]` keys: ε, minimum element size (as the
+/// The hierarchy's parameters from the scene: the preset's (`HierarchyParams::preview()`, `default()`
+/// or `final_quality()` for `quality`), then the `[radiosity]` keys: ε, minimum element size (as the
 /// diagonal's divisor), visibility rays, passes, the scene's tolerance and seed, and three quarters of
 /// `memory` for nodes and links (the rest is the scene, the ray accelerators and the output mesh).
 pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
     let h = &scene.radiosity.hierarchy;
-    let defaults = HierarchyParams::default();
+    let defaults = match h.preset {
+        Quality::Preview => HierarchyParams::preview(),
+        Quality::Default => HierarchyParams::default(),
+        Quality::High => HierarchyParams::final_quality(),
+    };
     let diagonal = scene.diagonal();
     let min_element_divisor = match h.min_element_size {
         Some(size) if size > 0.0 && diagonal > 0.0 => (diagonal / size).max(1.0),
         _ => defaults.min_element_divisor,
     };
     HierarchyParams {
-        error_threshold: h.error_threshold,
+        error_threshold: h.error_threshold.unwrap_or(defaults.error_threshold),
         min_element_divisor,
-        visibility_rays: h.visibility_rays,
-        refinement_passes: h.refinement_passes,
+        visibility_rays: h.visibility_rays.unwrap_or(defaults.visibility_rays),
+        refinement_passes: h.refinement_passes.unwrap_or(defaults.refinement_passes),
         tolerance: scene.radiosity.tolerance,
         memory_bytes: usize::try_from(h.memory_bytes / 4 * 3).unwrap_or(usize::MAX),
         seed: scene.radiosity.seed,

@@ -148,20 +148,23 @@ pub enum MethodChoice {
 pub const AUTO_MATRIX_SECONDS: f64 = 600.0;
 
 /// The scene-level settings of the hierarchical method. The solver's own parameter struct is built
-/// from these by the method (`radiosity::hierarchical`).
+/// from these by the method (`radiosity::hierarchical::hierarchy_params`): the preset's parameters
+/// (`HierarchyParams::preview()`, `default()`, `final_quality()`), then the keys the scene sets.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HierarchySettings {
     /// Memory budget of pass one in bytes (`memory = "8GB"`); also the budget `auto` holds the full
     /// matrix to. The hierarchy's nodes and links get three quarters of it.
     pub memory_bytes: u64,
-    /// ε: links are refined while ρ·B·ΔF exceeds ε × the mean emitted exitance.
-    pub error_threshold: f64,
+    /// The preset the hierarchy's parameters start from (`quality`; `Default` without one).
+    pub preset: Quality,
+    /// ε (`error_threshold`), or the preset's.
+    pub error_threshold: Option<f64>,
     /// Elements are not subdivided below this edge length (scene units); `None`: diagonal / 200.
     pub min_element_size: Option<f32>,
-    /// Rays per link for visibility.
-    pub visibility_rays: u32,
-    /// Refine-and-solve passes.
-    pub refinement_passes: u32,
+    /// Rays per link for visibility, or the preset's.
+    pub visibility_rays: Option<u32>,
+    /// Refine-and-solve passes, or the preset's.
+    pub refinement_passes: Option<u32>,
 }
 
 /// 8 GB, the budget for pass one.
@@ -171,25 +174,12 @@ impl Default for HierarchySettings {
     fn default() -> Self {
         HierarchySettings {
             memory_bytes: DEFAULT_MEMORY_BYTES,
-            error_threshold: 0.1,
+            preset: Quality::Default,
+            error_threshold: None,
             min_element_size: None,
-            visibility_rays: 8,
-            refinement_passes: 3,
+            visibility_rays: None,
+            refinement_passes: None,
         }
-    }
-}
-
-impl HierarchySettings {
-    /// The preset's threshold, visibility rays and passes (memory and element size untouched).
-    pub fn apply_quality(&mut self, quality: Quality) {
-        let (error_threshold, visibility_rays, refinement_passes) = match quality {
-            Quality::Preview => (0.3, 4, 2),
-            Quality::Default => (0.1, 8, 3),
-            Quality::High => (0.03, 16, 3),
-        };
-        self.error_threshold = error_threshold;
-        self.visibility_rays = visibility_rays;
-        self.refinement_passes = refinement_passes;
     }
 }
 
@@ -443,6 +433,6 @@ impl SceneDescription {
         self.image.samples_per_pixel = spp;
         self.image.adaptive_max_samples = self.image.adaptive_max_samples.max(spp);
         self.render.light_samples = light_samples;
-        self.radiosity.hierarchy.apply_quality(quality);
+        self.radiosity.hierarchy.preset = quality;
     }
 }

@@ -532,13 +532,17 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
             };
     }
     if let Some(e) = loc.ranged(&r.error_threshold, "error_threshold", |x| x > 0.0 && x <= 100.0, "in (0, 100]")? {
-        h.error_threshold = e;
+        h.error_threshold = Some(e);
     }
     if let Some(s) = loc.ranged(&r.min_element_size, "min_element_size", |x| x > 0.0, "a positive length")? {
         h.min_element_size = Some(s);
     }
-    h.visibility_rays = loc.positive_int(&r.visibility_rays, "visibility_rays", 1, 4096, h.visibility_rays)?;
-    h.refinement_passes = loc.positive_int(&r.refinement_passes, "refinement_passes", 1, 32, h.refinement_passes)?;
+    if r.visibility_rays.is_some() {
+        h.visibility_rays = Some(loc.positive_int(&r.visibility_rays, "visibility_rays", 1, 4096, 0)?);
+    }
+    if r.refinement_passes.is_some() {
+        h.refinement_passes = Some(loc.positive_int(&r.refinement_passes, "refinement_passes", 1, 32, 0)?);
+    }
     Ok(())
 }
 
