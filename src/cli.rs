@@ -101,9 +101,10 @@ pub struct OverrideArgs {
     /// The pass-one method, as the scene's `[radiosity] method`.
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
-    /// PNG exposure in stops (radiance × 2^stops before encoding).
+    /// PNG exposure in stops (radiance × 2^stops before encoding), or "auto" (log-average
+    /// luminance brought to 0.18).
     #[arg(long, allow_negative_numbers = true)]
-    pub exposure: Option<f32>,
+    pub exposure: Option<Exposure>,
     /// PNG tone curve applied after the exposure.
     #[arg(long, value_enum)]
     pub tone: Option<ToneCurve>,
@@ -193,7 +194,7 @@ pub struct InfoArgs {
 
 use crate::batch;
 use crate::compare;
-use crate::output::{self, ToneCurve};
+use crate::output::{self, Exposure, ToneCurve};
 use crate::progress::{Progress, Verbosity};
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
 use crate::scene::{DirectMode, MethodChoice, Overrides, Quality};
@@ -244,7 +245,7 @@ impl OverrideArgs {
 
     /// How PNGs are encoded.
     pub fn png(&self) -> PngSettings {
-        PngSettings { exposure_stops: self.exposure.unwrap_or(0.0), tone: self.tone.unwrap_or_default() }
+        PngSettings { exposure: self.exposure, tone: self.tone.unwrap_or_default() }
     }
 }
 

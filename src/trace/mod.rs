@@ -6,6 +6,7 @@
 pub mod camera;
 pub mod caustics;
 pub mod diffuse;
+pub mod direct_light;
 pub mod whitted;
 
 pub use camera::PinholeCamera;

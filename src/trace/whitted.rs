@@ -9,6 +9,7 @@ use glam::Vec3;
 
 use super::caustics::CausticMap;
 use super::diffuse::{Diffuse, DiffuseEstimator};
+use super::direct_light::{DirectEstimate, DirectLight};
 use crate::accel::Accel;
 use crate::film::Sampler;
 use crate::mesh::Mesh;
@@ -92,7 +93,7 @@ pub struct Tracer<'a> {
     materials: &'a [Material],
     params: RenderParams,
     max_depth: u32,
-    emitters: Emitters,
+    direct: DirectLight<'a>,
     /// Distance ray origins are moved off a surface (scene units).
     offset: f32,
     /// The scene's surfaces, when their smooth-shading normals should bend specular rays.
@@ -144,7 +145,13 @@ impl<'a> Tracer<'a> {
             materials,
             params: params.clone(),
             max_depth: params.max_depth.min(MAX_DEPTH_LIMIT),
-            emitters: Emitters::new(mesh, materials),
+            direct: DirectLight::new(
+                mesh,
+                accel,
+                Emitters::new(mesh, materials),
+                params.light_samples,
+                ray_offset(scale),
+            ),
             offset: ray_offset(scale),
             surfaces: None,
             caustics: None,
@@ -228,7 +235,7 @@ impl<'a> Tracer<'a> {
 
     /// Total area of the emitting triangles (scene units²).
     pub fn emitter_area(&self) -> f32 {
-        self.emitters.total_area()
+        self.direct.emitters().total_area()
     }
 
     /// Distance by which secondary ray origins leave a surface.
@@ -244,7 +251,7 @@ impl<'a> Tracer<'a> {
     ///
     /// with L_d the diffuse term (`Diffuse::radiance`: the Gouraud-interpolated radiosity B(p)/π, or
     /// with `DirectMode::Pixel` its indirect part plus direct light from shadow rays, see
-    /// `direct_light`), the branches' weights from `transport::scatter` (R the unpolarised Fresnel
+    /// `DirectLight::estimate`), the branches' weights from `transport::scatter` (R the unpolarised Fresnel
     /// reflectance of a dielectric with index `Ni`), plus Phong highlights from the emitters. Rays
     /// deeper than `max_depth` or below `min_throughput` (`transport::scatter::carries`) are not
     /// traced; rays leaving the scene see black.
@@ -296,10 +303,10 @@ impl<'a> Tracer<'a> {
                 };
                 let needs_light =
                     (self.diffuse.needs_direct_light() && reflectance.max_element() > 0.0) || highlight.is_some();
-                let (irradiance, phong) = if needs_light {
-                    self.direct_light(p, facing, highlight, sampler, counts)
+                let light = if needs_light {
+                    self.direct.estimate(p, facing, highlight, sampler, counts)
                 } else {
-                    (Vec3::ZERO, Vec3::ZERO)
+                    DirectEstimate::default()
                 };
                 // Caustic detail: the LS+D light at pixel resolution minus the same at element resolution.
                 let caustic = match &self.caustics {
@@ -314,13 +321,14 @@ impl<'a> Tracer<'a> {
                     exitance,
                     reflectance,
                     texel_albedo.is_some(),
-                    irradiance,
+                    light.irradiance,
                     caustic,
                 );
                 radiance += ray.throughput * diffuse;
                 if let Some((_, n)) = highlight {
                     // Normalised Phong lobe: f = Ks·(n + 2)/(2π)·cosⁿα.
-                    radiance += ray.throughput * material.specular_reflectance * ((n + 2.0) / (2.0 * PI)) * phong;
+                    radiance +=
+                        ray.throughput * material.specular_reflectance * ((n + 2.0) / (2.0 * PI)) * light.highlight;
                 }
             } else if mode == TraceMode::Radiosity || !material.is_dielectric() {
                 // Back of a one-sided surface: black, and the path ends (a dielectric is still
@@ -334,74 +342,5 @@ impl<'a> Tracer<'a> {
             stack.push_branches(&ray, &scatter(material, ray.dir, &hit), &hit, self.offset, self.params.min_throughput);
         }
         radiance
-    }
-
-    /// Light from the emitters at point `p` with unit normal `n` (on the side being shaded), by
-    /// `light_samples` shadow rays to points x_k chosen on the emitters by area (stratified in the
-    /// area-cumulative coordinate):
-    ///
-    /// irradiance ≈ (A/N) Σ_k V(p, x_k) L_e(x_k) cos θ_k cos θ'_k / r_k²,
-    ///
-    /// with A the total emitter area, θ at p, θ' at the emitter (only its emitting side counts). The
-    /// diffuse reflected radiance is ρ/π times it. With `highlight = (mirror direction r, exponent n)`
-    /// it also returns the same sum weighted by cosⁿα, α the angle between r and the light direction
-    /// (the Phong lobe without its Ks·(n + 2)/(2π) normalisation).
-    fn direct_light(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        highlight: Option<(Vec3, f32)>,
-        sampler: &mut Sampler,
-        counts: &mut RayCounts,
-    ) -> (Vec3, Vec3) {
-        let samples = self.params.light_samples;
-        if samples == 0 || self.emitters.is_empty() {
-            return (Vec3::ZERO, Vec3::ZERO);
-        }
-        let mesh = self.mesh;
-        let origin = p + n * self.offset;
-        let mut irradiance = Vec3::ZERO;
-        let mut phong = Vec3::ZERO;
-        for k in 0..samples {
-            let xi = (k as f32 + sampler.next_1d()) / samples as f32;
-            let r = sampler.next_1d();
-            let Some(sample) = self.emitters.sample(mesh, xi, r) else {
-                break;
-            };
-            let (t, x) = (sample.triangle as usize, sample.point);
-            let weight = sample.inverse_density / samples as f32;
-            let to_light = x - origin;
-            let dist2 = to_light.length_squared();
-            if dist2.is_nan() || dist2 <= 0.0 {
-                continue;
-            }
-            let dist = dist2.sqrt();
-            let w = to_light / dist;
-            let cos_here = n.dot(w);
-            if cos_here <= 0.0 {
-                continue;
-            }
-            let front_element = mesh.triangle_element[t] as usize;
-            let cos_front = -mesh.elements.normal[front_element].dot(w);
-            let Some(element) = mesh.side_element(t, cos_front > 0.0) else {
-                continue;
-            };
-            let cos_light = cos_front.abs();
-            let emitted_radiance = mesh.elements.emission[element] / PI;
-            if emitted_radiance.max_element() <= 0.0 || cos_light <= 0.0 {
-                continue;
-            }
-            counts.shadow += 1;
-            if self.accel.occluded(origin, w, dist - self.offset) {
-                continue;
-            }
-            let contribution = emitted_radiance * (cos_here * cos_light / dist2 * weight);
-            irradiance += contribution;
-            if let Some((mirror, exponent)) = highlight {
-                let cos_alpha = mirror.dot(w).max(0.0);
-                phong += contribution * cos_alpha.powf(exponent);
-            }
-        }
-        (irradiance, phong)
     }
 }
