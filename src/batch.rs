@@ -10,7 +10,7 @@ use crate::output::{Exposure, ToneCurve};
 use crate::progress::Progress;
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
 use crate::scene::overrides::{CameraOverride, MaterialOverride};
-use crate::scene::{DirectMode, Overrides, Quality};
+use crate::scene::{DirectMode, MethodChoice, Overrides, Quality};
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -75,6 +75,9 @@ struct JobEntry {
     seed: Option<u64>,
     direct: Option<DirectMode>,
     quality: Option<Quality>,
+    /// The pass-one method, as the scene's `[radiosity] method`.
+    #[serde(default)]
+    method: Option<MethodChoice>,
     exposure: Option<Exposure>,
     tone: Option<ToneCurve>,
     camera: Option<CameraOverride>,
@@ -273,6 +276,7 @@ fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
         seed: entry.seed,
         direct: entry.direct,
         quality: entry.quality,
+        method: entry.method,
         camera: entry.camera.clone(),
         materials,
     };

@@ -62,6 +62,14 @@ pub enum DirectArg {
     Pixel,
 }
 
+/// The pass-one method (`[radiosity] method`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MethodArg {
+    Auto,
+    Matrix,
+    Hierarchical,
+}
+
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum QualityArg {
     Preview,
@@ -91,6 +99,9 @@ pub struct OverrideArgs {
     /// A named preset of element size, hemicube resolution, samples and light samples.
     #[arg(long, value_enum)]
     pub quality: Option<QualityArg>,
+    /// The pass-one method, as the scene's `[radiosity] method`.
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
     /// PNG exposure in stops (radiance × 2^stops before encoding), or "auto" (log-average
     /// luminance brought to 0.18).
     #[arg(long, allow_negative_numbers = true)]
@@ -138,6 +149,9 @@ pub struct SolveArgs {
     pub seed: Option<u64>,
     #[arg(long, value_enum)]
     pub quality: Option<QualityArg>,
+    /// The pass-one method, as the scene's `[radiosity] method`.
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
 }
 
 #[derive(Args, Debug)]
@@ -198,7 +212,7 @@ use crate::compare;
 use crate::output::{self, Exposure, ToneCurve};
 use crate::progress::{Progress, Verbosity};
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
-use crate::scene::{DirectMode, Overrides, Quality};
+use crate::scene::{DirectMode, MethodChoice, Overrides, Quality};
 
 impl From<QualityArg> for Quality {
     fn from(q: QualityArg) -> Self {
@@ -206,6 +220,16 @@ impl From<QualityArg> for Quality {
             QualityArg::Preview => Quality::Preview,
             QualityArg::Default => Quality::Default,
             QualityArg::High => Quality::High,
+        }
+    }
+}
+
+impl From<MethodArg> for MethodChoice {
+    fn from(m: MethodArg) -> Self {
+        match m {
+            MethodArg::Auto => MethodChoice::Auto,
+            MethodArg::Matrix => MethodChoice::Matrix,
+            MethodArg::Hierarchical => MethodChoice::Hierarchical,
         }
     }
 }
@@ -229,6 +253,7 @@ impl OverrideArgs {
             seed: self.seed,
             direct: self.direct.map(Into::into),
             quality: self.quality.map(Into::into),
+            method: self.method.map(Into::into),
             ..Default::default()
         }
     }
@@ -299,7 +324,12 @@ fn render_command(args: &RenderArgs, progress: &Progress) -> Result<(), Failure>
 
 fn solve_command(args: &SolveArgs, progress: &Progress) -> Result<(), Failure> {
     run::check_output_directory(&args.output)?;
-    let overrides = Overrides { seed: args.seed, quality: args.quality.map(Into::into), ..Default::default() };
+    let overrides = Overrides {
+        seed: args.seed,
+        quality: args.quality.map(Into::into),
+        method: args.method.map(Into::into),
+        ..Default::default()
+    };
     let job = Job { scene: args.scene.clone(), overrides, work: Work::Solve { output: args.output.clone() } };
     let mut outcome = Outcome::default();
     Runner::single().run(&job, progress, &mut outcome)?;

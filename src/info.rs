@@ -2,8 +2,8 @@
 //! solved, with the suspicious geometry that usually causes light leaks.
 
 use crate::mesh;
-use crate::radiosity::form_factors;
-use crate::scene::SceneDescription;
+use crate::radiosity::{form_factors, hierarchical, hierarchy, method};
+use crate::scene::{MethodChoice, SceneDescription};
 use crate::trace::back_faces::{self, BackFaceShare};
 
 /// One emitting material's share of the scene.
@@ -25,6 +25,9 @@ pub struct InfoReport {
     pub max_element_edge: f32,
     pub hemicube_resolution_px: u32,
     pub solver: String,
+    /// The pass-one method the scene will use, and for `method = "auto"` why
+    /// (`method::auto_prefers_hierarchy`).
+    pub pass_one_method: String,
     pub emitters: Vec<EmitterInfo>,
     /// Predicted size of the form-factor matrix (`radiosity::form_factors::estimate`).
     pub estimated_form_factor_bytes: u64,
@@ -85,6 +88,7 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
         max_element_edge: p.max_element_edge,
         hemicube_resolution_px: p.hemicube_resolution_px,
         solver: p.solver.name().to_string(),
+        pass_one_method: pass_one_method(scene),
         emitters,
         estimated_form_factor_bytes: bytes,
         estimated_form_factor_seconds: seconds,
@@ -94,6 +98,29 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
     }
 }
 
+/// The method `run` will choose, with the reason for `auto` and, for the hierarchy, its input size.
+fn pass_one_method(scene: &SceneDescription) -> String {
+    let name = method::for_scene(scene).name();
+    let why = match scene.radiosity.method {
+        MethodChoice::Auto => match method::auto_prefers_hierarchy(scene) {
+            Some(reason) => format!(" (auto: {reason})"),
+            None => " (auto: the uniform mesh fits)".to_string(),
+        },
+        _ => String::new(),
+    };
+    let size = if name == "hierarchical" {
+        format!(
+            "; {} input triangles, at least {:.1} MiB before refinement, budget {:.1} GB",
+            hierarchy::count_input_triangles(scene),
+            hierarchical::minimum_bytes(scene) as f64 / (1u64 << 20) as f64,
+            scene.radiosity.hierarchy.memory_bytes as f64 / 1e9
+        )
+    } else {
+        String::new()
+    };
+    format!("{name}{why}{size}")
+}
+
 impl std::fmt::Display for InfoReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         const MIB: f64 = (1u64 << 20) as f64;
@@ -101,6 +128,7 @@ impl std::fmt::Display for InfoReport {
         writeln!(f, "surfaces        {} ({} materials)", self.surfaces, self.materials)?;
         writeln!(f, "elements        {} (max element edge {})", self.elements, self.max_element_edge)?;
         writeln!(f, "hemicube        {}² top face, solver {}", self.hemicube_resolution_px, self.solver)?;
+        writeln!(f, "pass one        {}", self.pass_one_method)?;
         if self.emitters.is_empty() {
             writeln!(f, "emitters        none: the radiosity solution will be black")?;
         }

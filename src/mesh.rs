@@ -210,6 +210,32 @@ pub fn count_surface_elements(surface: &Surface, max_element_edge: f32) -> u64 {
 }
 
 impl Mesh {
+    /// Bytes its arrays hold (by length; the shared textures are not counted): what a cache that
+    /// keeps this mesh is charged.
+    pub fn memory_bytes(&self) -> u64 {
+        fn bytes<T>(v: &[T]) -> u64 {
+            std::mem::size_of_val(v) as u64
+        }
+        let e = &self.elements;
+        bytes(&self.positions)
+            + bytes(&self.uvs)
+            + bytes(&e.corners)
+            + bytes(&e.centre)
+            + bytes(&e.normal)
+            + bytes(&e.area)
+            + bytes(&e.surface)
+            + bytes(&e.material)
+            + bytes(&e.reflectance)
+            + bytes(&e.emission)
+            + bytes(&self.triangles)
+            + bytes(&self.triangle_element)
+            + bytes(&self.triangle_back_element)
+            + bytes(&self.triangle_back_vertices)
+            + bytes(&self.surface_source)
+            + bytes(&self.surface_has_uv)
+            + bytes(&self.element_coverage)
+    }
+
     /// Cuts every surface of the scene into elements of at most `max_element_edge` (see module docs).
     pub fn build(scene: &SceneDescription, max_element_edge: f32) -> Mesh {
         Mesh::build_with_textures(scene, max_element_edge, Arc::new(SceneTextures::default()))

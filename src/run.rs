@@ -21,8 +21,9 @@ use crate::material::SceneTextures;
 use crate::mesh::{self, Mesh};
 use crate::output::{self, Exposure, OutputError, ToneCurve};
 use crate::progress::{Progress, Verbosity};
+use crate::radiosity::hierarchical;
 use crate::radiosity::method::{self, MethodError, Reuse};
-use crate::radiosity::solution_file::SolutionFileError;
+use crate::radiosity::solution_file::{self, SolutionFileError};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
 use crate::scene::{self, Overrides, SceneDescription, SceneError};
@@ -153,11 +154,16 @@ pub struct Outcome {
     pub reused_solution: bool,
 }
 
+/// A solution a batch keeps, with the mesh of a method that meshes on its own (a uniform mesh is
+/// rebuilt from the scene).
+type KeptSolution = (Option<Mesh>, Arc<Solution>);
+
 /// Runs jobs one after another, keeping for the later ones what they may reuse.
 pub struct Runner {
     reuse: Reuse,
-    /// Solutions by `PassOneMethod::solution_key`, least recently used out; only kept across jobs.
-    solutions: Option<Lru<Arc<Solution>>>,
+    /// Solutions by `PassOneMethod::solution_key`, with the mesh of a method that meshes on its own,
+    /// least recently used out; only kept across jobs.
+    solutions: Option<Lru<KeptSolution>>,
 }
 
 impl Runner {
@@ -219,22 +225,28 @@ impl Runner {
         progress: &Progress,
         outcome: &mut Outcome,
     ) -> Result<(Mesh, Arc<Solution>), Failure> {
-        let mesh = build_mesh(scene, progress)?;
-        outcome.stats.pass_one.elements = mesh.elements.len();
         if let Some(path) = solution_file {
-            let solution = Solution::load(path, fingerprint::fingerprint(&mesh, &scene.materials))?;
-            return Ok((mesh, Arc::new(solution)));
+            let (mesh, solution) = load_solution(scene, path, progress)?;
+            outcome.stats.pass_one.elements = mesh.elements.len();
+            return Ok((mesh, solution));
         }
-        let method = method::for_params(&scene.radiosity);
+        let method = method::for_scene(scene);
+        let mesh = if method.uses_uniform_mesh() {
+            build_mesh(scene, progress)?
+        } else {
+            Mesh { textures: Arc::new(load_textures(scene, progress)), ..Default::default() }
+        };
+        outcome.stats.pass_one.elements = mesh.elements.len();
         let key = self.solutions.as_ref().map(|_| method.solution_key(scene, &mesh));
         if let (Some(solutions), Some(key)) = (&mut self.solutions, key) {
-            if let Some(solution) = solutions.get(key) {
+            if let Some((solved_mesh, solution)) = solutions.get(key) {
                 outcome.reused_solution = true;
                 outcome.reused_form_factors = true;
+                let mesh = solved_mesh.clone().unwrap_or(mesh);
                 return Ok((mesh, solution.clone()));
             }
         }
-        if !scene.has_emitter() {
+        if !scene.has_emitter() && method.uses_uniform_mesh() {
             let black = Solution::black(&mesh, &scene.materials);
             return Ok((mesh, Arc::new(black)));
         }
@@ -243,10 +255,37 @@ impl Runner {
         outcome.reused_form_factors = done.reused_form_factors;
         let solution = Arc::new(done.solution);
         if let (Some(solutions), Some(key)) = (&mut self.solutions, key) {
-            solutions.insert(key, solution.clone(), solution.memory_bytes());
+            // A method with its own mesh keeps it with the solution (a uniform mesh is rebuilt).
+            let own_mesh = (!method.uses_uniform_mesh()).then(|| done.mesh.clone());
+            let bytes = solution.memory_bytes() + own_mesh.as_ref().map_or(0, Mesh::memory_bytes);
+            solutions.insert(key, (own_mesh, solution.clone()), bytes);
         }
         Ok((done.mesh, solution))
     }
+}
+
+/// A saved solution and the mesh it lives on: the leaf mesh it carries (hierarchical), or the scene's
+/// uniform mesh; refused when its fingerprint is not the scene's.
+fn load_solution(scene: &SceneDescription, path: &Path, progress: &Progress) -> Result<(Mesh, Arc<Solution>), Failure> {
+    if solution_file::carries_leaf_mesh(path)? {
+        let textures = Arc::new(load_textures(scene, progress));
+        let expected = hierarchical::scene_fingerprint(scene, &hierarchical::hierarchy_params(scene), &textures);
+        let solution = Solution::load(path, expected)?;
+        let mesh = hierarchical::mesh_of(scene, &solution, textures)
+            .ok_or_else(|| Failure::internal(anyhow::anyhow!("{}: leaf mesh missing", path.display())))?;
+        if mesh.positions.len() != solution.vertex_exitance.len()
+            || mesh.elements.len() != solution.element_exitance.len()
+        {
+            return Err(Failure::input(anyhow::anyhow!(
+                "{}: the leaf mesh it carries does not match its values; re-run `radray solve`",
+                path.display()
+            )));
+        }
+        return Ok((mesh, Arc::new(solution)));
+    }
+    let mesh = build_mesh(scene, progress)?;
+    let solution = Solution::load(path, fingerprint::fingerprint(&mesh, &scene.materials))?;
+    Ok((mesh, Arc::new(solution)))
 }
 
 /// Pass one of a single run (see `Runner::pass_one`), adding what it measured to `stats`; hand the
@@ -289,10 +328,7 @@ pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh,
         });
     }
     let stage = progress.stage("meshing", scene.surfaces.len() as u64, "surfaces");
-    let (textures, warnings) = SceneTextures::load(&scene.materials);
-    for w in &warnings {
-        progress.note(&format!("warning: {w}"));
-    }
+    let textures = load_textures(scene, progress);
     let mesh = Mesh::build_with_textures(scene, edge, Arc::new(textures));
     stage.finish(&format!(
         "{} surfaces → {} elements, {} triangles",
@@ -301,6 +337,15 @@ pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh,
         mesh.triangles.len()
     ));
     Ok(mesh)
+}
+
+/// The scene's texture maps, loaded once per run; a map that cannot be read is a warning.
+fn load_textures(scene: &SceneDescription, progress: &Progress) -> SceneTextures {
+    let (textures, warnings) = SceneTextures::load(&scene.materials);
+    for w in &warnings {
+        progress.note(&format!("warning: {w}"));
+    }
+    textures
 }
 
 /// Checks that `output`'s directory exists, before any work.

@@ -155,15 +155,12 @@ fn element_estimator_closes_the_unit_cube_enclosure() {
 
 /// The furnace (scenes/furnace.toml: closed unit cube, Kd 0.5, Ke 1): radiance 2 everywhere. Since
 /// B = E/(1 − ρΣF), a leaf whose form factors (over its own and its ancestors' links) sum to 1 − δ is
-/// off by about ρδ/(1 − ρ) = δ; the issue's bound is 1%. That takes ε = 3e-3 (measured leaf sums
-/// 0.987–1.013); at the default ε = 0.1 the worst leaf is off by 12% (mixed-level links push a
-/// coarse receiver's mean form factor to leaves where it differs), which is the accuracy gap of this
-/// first cut.
+/// off by about ρδ/(1 − ρ) = δ; the issue's bound is 1%, at the default ε. Measured: worst leaf
+/// 0.48% at ε = 5e-3 (the default), 1.2% at 1e-2, 0.26% at 3e-3.
 #[test]
 fn furnace_closed_cube_gives_radiance_two_within_one_percent() {
     let scene = load_scene("furnace.toml");
-    let params = HierarchyParams { error_threshold: 3e-3, ..HierarchyParams::default() };
-    let solution = hierarchy::solve(&scene, &params, &mut |_| {}).unwrap();
+    let solution = hierarchy::solve(&scene, &HierarchyParams::default(), &mut |_| {}).unwrap();
     let exact = 2.0 * std::f64::consts::PI;
     let mut worst = 0.0f64;
     for (b, a) in solution.leaf_exitance.iter().zip(&solution.leaf_area) {
@@ -201,9 +198,7 @@ fn two_facing_squares_match_the_closed_form_exchange() {
             })
             .collect();
         let scene = scene_of(surfaces);
-        // ε as in the furnace test (the default 0.1 leaves 0.7% on the dim plate).
-        let params = HierarchyParams { error_threshold: 3e-3, ..HierarchyParams::default() };
-        let solution = hierarchy::solve(&scene, &params, &mut |_| {}).unwrap();
+        let solution = hierarchy::solve(&scene, &HierarchyParams::default(), &mut |_| {}).unwrap();
         let means = solution.surface_mean_exitance(2);
         for (k, want) in case["expected"]["B"].as_array().unwrap().iter().enumerate() {
             let want = want.as_f64().unwrap();
@@ -266,6 +261,7 @@ fn refinement_never_makes_the_error_estimate_grow() {
     hsolve::reset_to_emission(&mut nodes, root);
     let mut settings = refine::RefineSettings {
         threshold: 0.3 * 0.22,
+        floor_area: (scene.diagonal() / 100.0).powi(2),
         min_element_area: (scene.diagonal() / 100.0).powi(2),
         budget_bytes: 1 << 30,
     };
@@ -294,13 +290,15 @@ fn refinement_never_makes_the_error_estimate_grow() {
 /// of the brightest non-emitting surface for dim ones: the hierarchy's element links err ≤ 1% (the
 /// estimator test) and the hemicube's delta form factors +0.54/N² in sum (tests/form_factors.rs).
 ///
-/// Ignored: the first cut misses it. Measured at ε = 0.1 (red channel, hierarchy / full matrix): floor
-/// 0.85, ceiling 0.81, back wall 0.90, side walls 0.93, top faces of the blocks 0.97–0.98, lit block
-/// faces 0.64–0.92, the dark block faces 1.7× (before near cluster pairs were forced to refine the
-/// floor's direct light matched an independent probe within 0.5%, and the ratios were 0.66–1.0).
-/// Closing this gap is left for issue 10.
+/// Ignored: still missed. Measured at the default ε = 5e-3 (1.44 M links, 49k leaves; red channel,
+/// hierarchy / full matrix): the blocks' lit tops 0.99 and 0.99, floor 0.92, ceiling 0.89, back wall
+/// 0.94, red and green walls 0.96, block sides 0.83–0.96; worst at 246% of the bound. The gap is
+/// systematic (darker everywhere that indirect light dominates, direct-lit tops agree), and it does
+/// not close with ε (1e-2: 445%, 3e-2: 599%, at 0.7 M and 0.2 M links), so it is not the refinement
+/// tolerance: see the report of this session for what was ruled out (pass-one form-factor sums,
+/// near-link estimators, edge quadrature).
 #[test]
-#[ignore = "first cut of the hierarchy: surface means off by up to 36% (see doc comment)"]
+#[ignore = "the hierarchy is 4-17% darker than the full matrix where indirect light dominates (see doc comment)"]
 fn hierarchy_agrees_with_the_full_matrix_solver_on_the_cornell_box() {
     use radray::mesh::Mesh;
     use radray::radiosity::{form_factors, solver};
@@ -395,30 +393,44 @@ fn the_memory_budget_is_kept_and_reported() {
     assert!(solution.leaf_exitance.iter().any(|b| b.max_element() > 0.0));
 }
 
-/// Conforming interpolation: every vertex that lies at the midpoint of a leaf's edge (a hanging node
-/// of a finer neighbour) carries the mean of that edge's ends, so shading is continuous.
+/// Conforming interpolation: a hanging node is a vertex m at the midpoint of a leaf's edge (a, b)
+/// where finer leaves on the other side have the edges (a, m) and (m, b) (same vertex indices, so the
+/// same smoothing group). Every hanging node must carry the mean of a and b, so that Gouraud shading
+/// along the coarse edge and along the two fine edges is the same line (no T-vertex crack). Tolerance:
+/// f32 vertex values, 1e-5 relative.
 #[test]
 fn hanging_nodes_take_their_edges_interpolated_value() {
     let scene = load_scene("cornell_box.toml");
     let solution = hierarchy::solve(&scene, &HierarchyParams::preview(), &mut |_| {}).unwrap();
     let m = &solution.mesh;
-    let mut at = std::collections::HashMap::new();
-    for (i, p) in m.positions.iter().enumerate() {
-        at.entry(p.to_array().map(f32::to_bits)).or_insert_with(Vec::new).push(i);
-    }
-    let mut hanging = 0;
+    let mut edges = std::collections::HashSet::new();
     for t in &m.triangles {
         for e in 0..3 {
-            let (a, b) = (t[e] as usize, t[(e + 1) % 3] as usize);
-            let mid = ((m.positions[a] + m.positions[b]) * 0.5).to_array().map(f32::to_bits);
-            for &v in at.get(&mid).into_iter().flatten() {
-                let want = (m.vertex_exitance[a] + m.vertex_exitance[b]) * 0.5;
-                // Same smoothing group only: a vertex of another surface at that point is not hanging.
-                if (m.vertex_exitance[v] - want).abs().max_element() <= 1e-4 * want.max_element().max(1.0) {
-                    hanging += 1;
-                }
-            }
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            edges.insert((a.min(b), a.max(b)));
         }
     }
+    let mut at = std::collections::HashMap::new();
+    for (i, p) in m.positions.iter().enumerate() {
+        at.entry(p.to_array().map(f32::to_bits)).or_insert_with(Vec::new).push(i as u32);
+    }
+    let has = |a: u32, b: u32| edges.contains(&(a.min(b), a.max(b)));
+    let mut hanging = 0;
+    for &(a, b) in &edges {
+        let mid = ((m.positions[a as usize] + m.positions[b as usize]) * 0.5).to_array().map(f32::to_bits);
+        for &v in at.get(&mid).into_iter().flatten() {
+            if !(has(a, v) && has(v, b)) {
+                continue;
+            }
+            hanging += 1;
+            let want = (m.vertex_exitance[a as usize] + m.vertex_exitance[b as usize]) * 0.5;
+            let got = m.vertex_exitance[v as usize];
+            assert!(
+                (got - want).abs().max_element() <= 1e-5 * want.max_element().max(1e-6),
+                "hanging node {v} on edge ({a}, {b}): {got} vs {want}"
+            );
+        }
+    }
+    println!("{hanging} hanging nodes");
     assert!(hanging > 0, "the preview solution of the Cornell box has subdivided neighbours");
 }

@@ -7,6 +7,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use super::fingerprint;
+use super::hierarchical::Hierarchical;
+use super::hierarchy::HierarchyError;
 use super::matrix::{form_factors, FormFactors};
 use super::matrix_free;
 use super::solution::Solution;
@@ -17,7 +19,7 @@ use crate::accel::Accel;
 use crate::cache::Lru;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
+use crate::scene::{MethodChoice, RadiosityParams, SceneDescription, SolverKind, AUTO_MATRIX_SECONDS};
 use crate::transport::photons::RunPhotons;
 
 /// Why a method refuses a scene (before anything large is allocated).
@@ -25,6 +27,10 @@ use crate::transport::photons::RunPhotons;
 pub enum MethodError {
     #[error("{scene}: the form factors of {elements} elements at hemicube resolution {resolution} would need about {needed_gib:.1} GiB, but about {available_gib:.1} GiB is available; use a larger max_element_edge (memory grows with the square of the element count), a lower hemicube_resolution, or solver = \"progressive\" with store_form_factors = false (no stored matrix: O(n) memory, one hemicube per shot; pair it with a looser tolerance such as 1e-2)")]
     OutOfMemory { scene: String, elements: usize, resolution: u32, needed_gib: f64, available_gib: f64 },
+    #[error("{scene}: the hierarchy needs at least {needed_gib:.2} GiB for its {triangles} input triangles before any refinement, over three quarters of the memory budget of {budget_gib:.2} GiB; raise [radiosity] memory or simplify the scene")]
+    HierarchyOverBudget { scene: String, triangles: usize, needed_gib: f64, budget_gib: f64 },
+    #[error("{scene}: {source}")]
+    Hierarchy { scene: String, source: HierarchyError },
 }
 
 /// What pass one made: the mesh the solution belongs to, the solution, and what was measured.
@@ -68,6 +74,13 @@ pub trait PassOneMethod {
     /// The name reported in statistics.
     fn name(&self) -> String;
 
+    /// Whether `solve` works on the scene's uniform mesh (`run::build_mesh`). A method that meshes
+    /// adaptively (`Hierarchical`) returns `false`: it is handed an empty mesh that carries only the
+    /// scene's textures, and returns the mesh it solved on.
+    fn uses_uniform_mesh(&self) -> bool {
+        true
+    }
+
     /// Refuses a scene whose working memory could not fit, before it is allocated.
     fn check_memory(&self, scene: &SceneDescription, mesh: &Mesh) -> Result<(), MethodError>;
 
@@ -89,14 +102,62 @@ pub trait PassOneMethod {
     ) -> Result<PassOne, MethodError>;
 }
 
-/// The scene's method: matrix-free shooting when `store_form_factors = false`, else the stored matrix
-/// with the scene's solver.
+/// The uniform mesh's method: matrix-free shooting when `store_form_factors = false`, else the stored
+/// matrix with the scene's solver.
 pub fn for_params(params: &RadiosityParams) -> Box<dyn PassOneMethod> {
     if params.store_form_factors {
         Box::new(FullMatrix { solver: params.solver })
     } else {
         Box::new(MatrixFree)
     }
+}
+
+/// The scene's method (`[radiosity] method`): `matrix` is `for_params`; `hierarchical` is
+/// `Hierarchical`; `auto` is `for_params` unless `auto_prefers_hierarchy` says the uniform mesh is
+/// out of reach.
+pub fn for_scene(scene: &SceneDescription) -> Box<dyn PassOneMethod> {
+    let hierarchical = match scene.radiosity.method {
+        MethodChoice::Matrix => false,
+        MethodChoice::Hierarchical => true,
+        MethodChoice::Auto => auto_prefers_hierarchy(scene).is_some(),
+    };
+    if hierarchical {
+        Box::new(Hierarchical)
+    } else {
+        for_params(&scene.radiosity)
+    }
+}
+
+/// Why `method = "auto"` leaves the uniform mesh for the hierarchy, or `None` to keep it. Only the
+/// element count is needed (no meshing): with `store_form_factors = false` (matrix-free, O(n)
+/// memory) only above `run::MAX_ELEMENTS` elements; with the stored matrix also when its predicted
+/// size exceeds the `memory` budget or the memory available, or its predicted hemicube time
+/// (`form_factors::estimate_counts`, every element a row) exceeds `AUTO_MATRIX_SECONDS`.
+pub fn auto_prefers_hierarchy(scene: &SceneDescription) -> Option<String> {
+    let params = &scene.radiosity;
+    let elements = crate::mesh::count_elements(scene, params.max_element_edge);
+    if elements > crate::run::MAX_ELEMENTS {
+        return Some(format!("{elements} uniform elements, over the limit of {}", crate::run::MAX_ELEMENTS));
+    }
+    if !params.store_form_factors {
+        return None;
+    }
+    let estimate = form_factors::estimate_counts(elements as usize, elements as usize, params);
+    let budget = params.hierarchy.memory_bytes.min(available_memory_bytes().unwrap_or(u64::MAX));
+    if estimate.matrix_bytes > budget {
+        return Some(format!(
+            "the full matrix of {elements} elements would take about {:.1} GB, over the budget of {:.1} GB",
+            estimate.matrix_bytes as f64 / 1e9,
+            budget as f64 / 1e9
+        ));
+    }
+    if estimate.seconds > AUTO_MATRIX_SECONDS {
+        return Some(format!(
+            "the full matrix of {elements} elements would take about {:.0} s of hemicubes, over {AUTO_MATRIX_SECONDS} s",
+            estimate.seconds
+        ));
+    }
+    None
 }
 
 /// Bytes the form-factor matrix may take at most: each stored row holds at most one entry per other

@@ -1,9 +1,12 @@
 //! The immutable result of pass one: per-element and per-vertex radiosity (exitance), the direct part
 //! of it, and how the solver got there. Pass two reads it; `solution_file` saves and loads it.
 
+use std::sync::Arc;
+
 use glam::{DVec3, Vec3};
 
 use super::fingerprint::fingerprint;
+use super::leaf_mesh::LeafGeometry;
 use crate::mesh::Mesh;
 use crate::scene::{Material, SolverKind};
 
@@ -24,6 +27,9 @@ pub struct Solution {
     /// Identifies the mesh and materials the solution belongs to: see `fingerprint`.
     pub mesh_fingerprint: u64,
     pub stats: SolveStats,
+    /// For a hierarchical solution: the leaf elements it lives on (pass two's mesh is built from them,
+    /// `leaf_mesh::build`); `None` for a solution on the scene's uniform mesh.
+    pub leaf_geometry: Option<Arc<LeafGeometry>>,
 }
 
 fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
@@ -57,6 +63,7 @@ impl Solution {
             vertex_direct_exitance: to_f32(&mesh.vertex_average(direct)),
             mesh_fingerprint: fingerprint(mesh, materials),
             stats,
+            leaf_geometry: None,
         }
     }
 
@@ -75,6 +82,7 @@ impl Solution {
                 residual_history: Vec::new(),
                 converged: true,
             },
+            leaf_geometry: None,
         }
     }
 

@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use std::sync::Arc;
+
 use super::fingerprint::fnv1a64;
+use super::leaf_mesh::LeafGeometry;
 use super::solution::Solution;
 use super::stats::SolveStats;
 use crate::output;
@@ -17,6 +20,9 @@ pub const FILE_MAGIC: [u8; 8] = *b"RADRAYSO";
 /// version 1, but the exitances of scenes with mirrors or glass include light that reached diffuse
 /// surfaces through them (extended form factors), so version 1 files of such scenes are stale.
 pub const FILE_VERSION: u32 = 2;
+/// Version of a file that also carries the leaf mesh of a hierarchical solution (`LeafGeometry`):
+/// version 2's layout with the leaf counts after the header and the leaf section before the checksum.
+pub const FILE_VERSION_LEAF_MESH: u32 = 3;
 
 /// Why a solution file could not be written or read. Every message names the file.
 #[derive(Debug, thiserror::Error)]
@@ -62,13 +68,19 @@ impl Solution {
     ///         12m      vertex exitance, then 12m vertex direct exitance
     /// end−8   8        FNV-1a 64 of every byte before it
     /// ```
+    ///
+    /// A hierarchical solution (with `leaf_geometry`) is written as version `FILE_VERSION_LEAF_MESH`:
+    /// after the header (at 56) the leaf mesh's position count p and leaf count t (u64 each), and
+    /// before the checksum 12p leaf positions (3 × f32), 12t leaf corners (3 × u32), 4t scene surfaces
+    /// (u32) and t back-side flags (u8, 0 or 1); t equals n.
     pub fn to_bytes(&self) -> Vec<u8> {
         let (n, m) = (self.element_exitance.len(), self.vertex_exitance.len());
         assert!(self.element_direct_exitance.len() == n && self.vertex_direct_exitance.len() == m);
         let h = self.stats.residual_history.len();
         let mut out = Vec::with_capacity(HEADER_BYTES + 8 * h + 24 * (n + m) + 8);
         out.extend_from_slice(&FILE_MAGIC);
-        out.extend_from_slice(&FILE_VERSION.to_le_bytes());
+        let version = if self.leaf_geometry.is_some() { FILE_VERSION_LEAF_MESH } else { FILE_VERSION };
+        out.extend_from_slice(&version.to_le_bytes());
         out.extend_from_slice(&(n as u64).to_le_bytes());
         out.extend_from_slice(&(m as u64).to_le_bytes());
         out.extend_from_slice(&self.mesh_fingerprint.to_le_bytes());
@@ -76,6 +88,10 @@ impl Solution {
         out.extend_from_slice(&self.stats.iterations.to_le_bytes());
         out.extend_from_slice(&(self.stats.converged as u32).to_le_bytes());
         out.extend_from_slice(&(h as u64).to_le_bytes());
+        if let Some(g) = &self.leaf_geometry {
+            out.extend_from_slice(&(g.positions.len() as u64).to_le_bytes());
+            out.extend_from_slice(&(g.triangles.len() as u64).to_le_bytes());
+        }
         for r in &self.stats.residual_history {
             out.extend_from_slice(&r.to_le_bytes());
         }
@@ -87,6 +103,18 @@ impl Solution {
                     out.extend_from_slice(&c.to_le_bytes());
                 }
             }
+        }
+        if let Some(g) = &self.leaf_geometry {
+            for c in g.positions.iter().flat_map(|p| p.to_array()) {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+            for v in g.triangles.iter().flatten() {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+            for s in &g.surface {
+                out.extend_from_slice(&s.to_le_bytes());
+            }
+            out.extend(g.back.iter().map(|&b| b as u8));
         }
         let checksum = fnv1a64(&out);
         out.extend_from_slice(&checksum.to_le_bytes());
@@ -109,7 +137,7 @@ impl Solution {
             actual_bytes: bytes.len() as u64,
         };
         let version = r.u32().ok_or_else(truncated_header)?;
-        if version != FILE_VERSION {
+        if version != FILE_VERSION && version != FILE_VERSION_LEAF_MESH {
             return Err(SolutionFileError::UnsupportedVersion {
                 path: path(),
                 found: version,
@@ -123,8 +151,20 @@ impl Solution {
         let iterations = r.u32().ok_or_else(truncated_header)?;
         let converged = r.u32().ok_or_else(truncated_header)?;
         let h = r.u64().ok_or_else(truncated_header)?;
+        let leaf_mesh = version == FILE_VERSION_LEAF_MESH;
+        let (p, t) = if leaf_mesh {
+            (r.u64().ok_or_else(truncated_header)?, r.u64().ok_or_else(truncated_header)?)
+        } else {
+            (0, 0)
+        };
         // Total length from the header's counts, in u128 so that no count can overflow it.
-        let expected = HEADER_BYTES as u128 + 8 * h as u128 + 24 * (n as u128 + m as u128) + 8;
+        let expected = HEADER_BYTES as u128
+            + if leaf_mesh { 16 } else { 0 }
+            + 8 * h as u128
+            + 24 * (n as u128 + m as u128)
+            + 12 * p as u128
+            + 17 * t as u128
+            + 8;
         if (bytes.len() as u128) < expected {
             return Err(SolutionFileError::Truncated {
                 path: path(),
@@ -151,6 +191,9 @@ impl Solution {
             1 => true,
             _ => return Err(corrupted("converged flag is neither 0 nor 1")),
         };
+        if leaf_mesh && t != n {
+            return Err(corrupted("leaf count differs from element count"));
+        }
         if found_fingerprint != expected_fingerprint {
             return Err(SolutionFileError::Stale {
                 path: path(),
@@ -165,6 +208,16 @@ impl Solution {
         let element_direct_exitance = r.vec3s(n);
         let vertex_exitance = r.vec3s(m);
         let vertex_direct_exitance = r.vec3s(m);
+        let leaf_geometry = if leaf_mesh {
+            Some(read_leaf_geometry(&mut r, p as usize, t as usize).ok_or_else(|| corrupted("leaf mesh"))?)
+        } else {
+            None
+        };
+        if let Some(g) = &leaf_geometry {
+            if g.triangles.iter().flatten().any(|&v| v as u64 >= p) {
+                return Err(corrupted("leaf corner past the leaf positions"));
+            }
+        }
         match (residual_history, element_exitance, element_direct_exitance, vertex_exitance, vertex_direct_exitance) {
             (Some(residual_history), Some(ee), Some(ed), Some(ve), Some(vd)) => Ok(Solution {
                 element_exitance: ee,
@@ -173,6 +226,7 @@ impl Solution {
                 vertex_direct_exitance: vd,
                 mesh_fingerprint: found_fingerprint,
                 stats: SolveStats { solver, iterations, residual_history, converged },
+                leaf_geometry: leaf_geometry.map(Arc::new),
             }),
             _ => Err(corrupted("data shorter than its header says")),
         }
@@ -190,6 +244,34 @@ impl Solution {
         let bytes = std::fs::read(path).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
         Solution::from_bytes(&bytes, path, expected_fingerprint)
     }
+}
+
+/// The leaf section of a version-3 file: p positions, t corners, surfaces and back flags.
+fn read_leaf_geometry(r: &mut Reader, p: usize, t: usize) -> Option<LeafGeometry> {
+    let positions = r.vec3s(p)?;
+    let triangles = (0..t).map(|_| Some([r.u32()?, r.u32()?, r.u32()?])).collect::<Option<Vec<_>>>()?;
+    let surface = (0..t).map(|_| r.u32()).collect::<Option<Vec<_>>>()?;
+    let back = (0..t)
+        .map(|_| match r.take::<1>()?[0] {
+            0 => Some(false),
+            1 => Some(true),
+            _ => None,
+        })
+        .collect::<Option<Vec<_>>>()?;
+    Some(LeafGeometry { positions, triangles, surface, back })
+}
+
+/// Whether the solution file at `path` carries a leaf mesh (a hierarchical solution), read from its
+/// version field; a file too short or foreign says no here and is refused by `Solution::load`.
+pub fn carries_leaf_mesh(path: &Path) -> Result<bool, SolutionFileError> {
+    use std::io::Read;
+    let mut head = [0u8; 12];
+    let mut file =
+        std::fs::File::open(path).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
+    let read = file.read(&mut head).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
+    Ok(read == 12
+        && head[..8] == FILE_MAGIC
+        && u32::from_le_bytes([head[8], head[9], head[10], head[11]]) == FILE_VERSION_LEAF_MESH)
 }
 
 /// Bytes before the residual history.
@@ -258,7 +340,29 @@ mod tests {
                 residual_history: vec![0.5, 0.01, 1e-5],
                 converged: true,
             },
+            leaf_geometry: None,
         }
+    }
+
+    fn sample_with_leaves() -> Solution {
+        let geometry = LeafGeometry {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            triangles: vec![[0, 1, 2], [0, 2, 1]],
+            surface: vec![3, 3],
+            back: vec![false, true],
+        };
+        Solution { leaf_geometry: Some(Arc::new(geometry)), ..sample() }
+    }
+
+    #[test]
+    fn a_leaf_mesh_round_trips_and_only_it_moves_the_version() {
+        assert_eq!(sample().to_bytes()[8..12], FILE_VERSION.to_le_bytes());
+        let s = sample_with_leaves();
+        let bytes = s.to_bytes();
+        assert_eq!(bytes[8..12], FILE_VERSION_LEAF_MESH.to_le_bytes());
+        let back = Solution::from_bytes(&bytes, Path::new("x"), s.mesh_fingerprint).unwrap();
+        assert_eq!(back.leaf_geometry, s.leaf_geometry);
+        assert_eq!(back.to_bytes(), bytes);
     }
 
     #[test]
@@ -282,8 +386,8 @@ mod tests {
         }
 
         #[test]
-        fn any_single_byte_change_or_truncation_is_refused(at in 0usize..1000, flip in 1u8..=255, cut in 0usize..1000) {
-            let s = sample();
+        fn any_single_byte_change_or_truncation_is_refused(at in 0usize..1000, flip in 1u8..=255, cut in 0usize..1000, leaves in any::<bool>()) {
+            let s = if leaves { sample_with_leaves() } else { sample() };
             let bytes = s.to_bytes();
             let mut mutated = bytes.clone();
             let at = at % bytes.len();

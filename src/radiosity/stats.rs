@@ -1,6 +1,7 @@
 //! What pass one measured: how a solve went (stored in solution files) and the figures a run reports
 //! (`--stats`, batch manifests).
 
+use super::hierarchy::HierarchyStats;
 use crate::scene::SolverKind;
 
 /// How a solve went.
@@ -35,4 +36,7 @@ pub struct PassOneStats {
     pub sweeps: u32,
     pub final_residual: f64,
     pub solve_seconds: f64,
+    /// What the hierarchical method did (absent for the other methods).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hierarchy: Option<HierarchyStats>,
 }

@@ -126,6 +126,89 @@ pub struct RadiosityParams {
     /// Rotate each hemicube by a seeded random angle about its normal (against aliasing).
     pub rotate_hemicubes: bool,
     pub seed: u64,
+    /// Which pass-one method solves the scene (`method`).
+    pub method: MethodChoice,
+    /// Settings of the hierarchical method (`memory`, `error_threshold`, `min_element_size`, …).
+    pub hierarchy: HierarchySettings,
+}
+
+/// Which pass-one method solves the scene (`[radiosity] method`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MethodChoice {
+    /// The full matrix (or matrix-free shooting with `store_form_factors = false`) when its predicted
+    /// matrix fits the memory budget and its predicted hemicube time is under `AUTO_MATRIX_SECONDS`;
+    /// the hierarchy otherwise.
+    #[default]
+    Auto,
+    /// The uniform mesh and the full matrix (or matrix-free shooting), whatever the scene's size.
+    Matrix,
+    /// Hierarchical radiosity with clustering and adaptive subdivision.
+    Hierarchical,
+}
+
+/// Predicted hemicube seconds above which `method = "auto"` leaves the full matrix for the hierarchy.
+pub const AUTO_MATRIX_SECONDS: f64 = 600.0;
+
+/// The scene-level settings of the hierarchical method. The solver's own parameter struct is built
+/// from these by the method (`radiosity::hierarchical::hierarchy_params`): the preset's parameters
+/// (`HierarchyParams::preview()`, `default()`, `final_quality()`), then the keys the scene sets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HierarchySettings {
+    /// Memory budget of pass one in bytes (`memory = "8GB"`); also the budget `auto` holds the full
+    /// matrix to. The hierarchy's nodes and links get three quarters of it.
+    pub memory_bytes: u64,
+    /// The preset the hierarchy's parameters start from (`quality`; `Default` without one).
+    pub preset: Quality,
+    /// ε (`error_threshold`), or the preset's.
+    pub error_threshold: Option<f64>,
+    /// Elements are not subdivided below this edge length (scene units); `None`: diagonal / 200.
+    pub min_element_size: Option<f32>,
+    /// Rays per link for visibility, or the preset's.
+    pub visibility_rays: Option<u32>,
+    /// Refine-and-solve passes, or the preset's.
+    pub refinement_passes: Option<u32>,
+}
+
+/// 8 GB, the budget for pass one.
+pub const DEFAULT_MEMORY_BYTES: u64 = 8_000_000_000;
+
+impl Default for HierarchySettings {
+    fn default() -> Self {
+        HierarchySettings {
+            memory_bytes: DEFAULT_MEMORY_BYTES,
+            preset: Quality::Default,
+            error_threshold: None,
+            min_element_size: None,
+            visibility_rays: None,
+            refinement_passes: None,
+        }
+    }
+}
+
+/// Parses a memory size: a whole number of bytes, or a number with a unit: `KB`, `MB`, `GB`, `TB`
+/// (powers of 1000), `KiB`, `MiB`, `GiB`, `TiB` (powers of 1024); `K`, `M`, `G`, `T` alone mean the
+/// decimal ones. Case and a space before the unit do not matter. `None` if it is not such a size or
+/// is zero.
+pub fn parse_memory_size(text: &str) -> Option<u64> {
+    let t = text.trim();
+    let split = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let number: f64 = number.parse().ok()?;
+    let scale: f64 = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1.0,
+        "k" | "kb" => 1e3,
+        "m" | "mb" => 1e6,
+        "g" | "gb" => 1e9,
+        "t" | "tb" => 1e12,
+        "kib" => 1024.0,
+        "mib" => 1024f64.powi(2),
+        "gib" => 1024f64.powi(3),
+        "tib" => 1024f64.powi(4),
+        _ => return None,
+    };
+    let bytes = number * scale;
+    (1.0..1.8e19).contains(&bytes).then_some(bytes as u64)
 }
 
 impl Default for RadiosityParams {
@@ -140,6 +223,8 @@ impl Default for RadiosityParams {
             store_form_factors: true,
             rotate_hemicubes: true,
             seed: 0,
+            method: MethodChoice::Auto,
+            hierarchy: HierarchySettings::default(),
         }
     }
 }
@@ -352,5 +437,6 @@ impl SceneDescription {
         self.image.samples_per_pixel = spp;
         self.image.adaptive_max_samples = self.image.adaptive_max_samples.max(spp);
         self.render.light_samples = light_samples;
+        self.radiosity.hierarchy.preset = quality;
     }
 }

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{check_camera, check_material, DirectMode, Quality, SceneDescription};
+use super::{check_camera, check_material, DirectMode, MethodChoice, Quality, SceneDescription};
 
 /// A batch job's new camera values (each optional).
 #[derive(Clone, Debug, Default, PartialEq, serde::Deserialize)]
@@ -36,6 +36,8 @@ pub struct Overrides {
     pub direct: Option<DirectMode>,
     /// A named preset, applied before the single values.
     pub quality: Option<Quality>,
+    /// The pass-one method (`[radiosity] method`).
+    pub method: Option<MethodChoice>,
     pub camera: Option<CameraOverride>,
     /// Per material name (in the order given).
     pub materials: Vec<(String, MaterialOverride)>,
@@ -75,6 +77,9 @@ impl Overrides {
         }
         if let Some(d) = self.direct {
             scene.render.direct = d;
+        }
+        if let Some(m) = self.method {
+            scene.radiosity.method = m;
         }
         if let Some(c) = &self.camera {
             let cam = &mut scene.camera;

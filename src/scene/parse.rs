@@ -88,6 +88,20 @@ struct RawRadiosity {
     store_form_factors: Option<S<bool>>,
     rotate_hemicubes: Option<bool>,
     seed: Option<u64>,
+    method: Option<MethodChoice>,
+    memory: Option<S<MemorySize>>,
+    error_threshold: Option<S<f64>>,
+    min_element_size: Option<S<f32>>,
+    visibility_rays: Option<S<i64>>,
+    refinement_passes: Option<S<i64>>,
+}
+
+/// `memory = 8000000000` or `memory = "8GB"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum MemorySize {
+    Bytes(i64),
+    Text(String),
 }
 
 #[derive(Deserialize)]
@@ -495,7 +509,45 @@ fn radiosity_params(
     if let Some(seed) = r.seed {
         p.seed = seed;
     }
+    hierarchy_settings(loc, r, &mut p)?;
     Ok(p)
+}
+
+/// The method and the hierarchy's keys of `[radiosity]`.
+fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) -> Result<(), SceneError> {
+    if let Some(m) = r.method {
+        p.method = m;
+    }
+    let h = &mut p.hierarchy;
+    if let Some(memory) = &r.memory {
+        let bytes = match memory.get_ref() {
+            MemorySize::Bytes(b) if *b > 0 => Some(*b as u64),
+            MemorySize::Bytes(_) => None,
+            MemorySize::Text(t) => parse_memory_size(t),
+        };
+        h.memory_bytes =
+            match bytes {
+                Some(b) => b,
+                None => return loc.error(
+                    memory.span(),
+                    "memory must be a positive size: bytes, or a number with KB, MB, GB, TB (or KiB, MiB, GiB, TiB), \
+                     such as \"8GB\"",
+                ),
+            };
+    }
+    if let Some(e) = loc.ranged(&r.error_threshold, "error_threshold", |x| x > 0.0 && x <= 100.0, "in (0, 100]")? {
+        h.error_threshold = Some(e);
+    }
+    if let Some(s) = loc.ranged(&r.min_element_size, "min_element_size", |x| x > 0.0, "a positive length")? {
+        h.min_element_size = Some(s);
+    }
+    if r.visibility_rays.is_some() {
+        h.visibility_rays = Some(loc.positive_int(&r.visibility_rays, "visibility_rays", 1, 4096, 0)?);
+    }
+    if r.refinement_passes.is_some() {
+        h.refinement_passes = Some(loc.positive_int(&r.refinement_passes, "refinement_passes", 1, 32, 0)?);
+    }
+    Ok(())
 }
 
 fn render_params(loc: &Locator, raw: Option<&RawRender>, base: RenderParams) -> Result<RenderParams, SceneError> {

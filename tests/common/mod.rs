@@ -142,6 +142,7 @@ pub fn solution(mesh: &Mesh, exitance: Vec<Vec3>, direct: Vec<Vec3>) -> Solution
             residual_history: Vec::new(),
             converged: true,
         },
+        leaf_geometry: None,
     }
 }
 

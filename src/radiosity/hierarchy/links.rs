@@ -6,7 +6,7 @@ use super::form_factor::{
     cluster_form_factor, cluster_form_factor_bound, element_projected_area, element_to_element, projected_area,
 };
 use super::nodes::Nodes;
-use super::visibility::{visible_fraction, VisibilityContext};
+use super::visibility::{sampled_form_factor, visible_fraction, VisibilityContext};
 
 /// A link while refining: receiver, source, form factor and its error spread.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -88,28 +88,67 @@ impl Links {
     }
 }
 
-/// The error of a link's transfer, in exitance units (W/m²): ε_RS = ρ_R · B_S · ΔF_RS, the BF criterion
-/// of Hanrahan, Salzman and Aupperle (1991) with the form factor replaced by its error estimate ΔF.
-/// ρ is the receiver's area-averaged largest channel and B the mean channel of the source's exitance.
-/// Refinement compares it with ε × the brightest emitter's exitance, so every receiver is resolved to
-/// the same relative accuracy whatever its size (down to the minimum element area).
-pub fn link_error(nodes: &Nodes, receiver: usize, source: usize, spread: f32) -> f64 {
-    nodes.reflectance_max[receiver] as f64 * nodes.exitance_mean[source] * spread as f64
+/// The error of a link's transfer in watts, the BF criterion of Hanrahan, Salzman and Aupperle (1991)
+/// as a power:
+///
+/// ε_RS = A_R · ρ_R · B_S · ΔF_RS,
+///
+/// ρ_R the receiver's area-averaged largest reflectance channel, B_S the mean channel of the source's
+/// (area-averaged) exitance, ΔF the form factor's error estimate (`LinkRecord::spread`). It is the
+/// reflected power the link may get wrong. Refinement compares it with ε × the scene's emitted power,
+/// so a dark link (B_S = 0 or ρ_R = 0) is never refined, and the number of links a scene needs does not
+/// grow with its triangle count: small receivers carry little power.
+///
+/// Summed over all links it is the global error estimate; refinement never raises that sum at a fixed
+/// exitance, because a child link's spread is capped by its parent's (receiver split: Σ A_r ρ_r = A_R
+/// ρ_R, ρ being area-averaged) or by its share A_s/A_S of it (source split or self-link expansion: B_S
+/// is the area-weighted mean of the children's B).
+pub fn link_error_power(nodes: &Nodes, receiver: usize, source: usize, spread: f32) -> f64 {
+    nodes.area[receiver] as f64 * nodes.reflectance_max[receiver] as f64 * nodes.exitance_mean[source] * spread as f64
 }
 
-/// The power a link's error stands for (W): A_R · `link_error`. Summed over all links it is the
-/// global error estimate; refinement never raises that sum at a fixed exitance, because a child link's
-/// spread is capped by its parent's (receiver split, Σ A_r = A_R and ρ is area-averaged) or by its
-/// share A_s/A_S of it (source split, B_S is the area-weighted mean of the children's B).
-pub fn link_error_power(nodes: &Nodes, receiver: usize, source: usize, spread: f32) -> f64 {
-    nodes.area[receiver] as f64 * link_error(nodes, receiver, source, spread)
+/// The part of a link's error that comes from the source's exitance varying over it (W):
+/// A_R · ρ_R · c · max_k |B_k − B_S| over the source's children k (0 for a leaf source), with c the
+/// form factor of a far link or the spread (bound) of a near one. Splitting the source removes it.
+pub fn source_variation_power(nodes: &Nodes, receiver: usize, source: usize, coefficient: f32) -> f64 {
+    let b = nodes.exitance_mean[source];
+    let spread = nodes.children(source).map(|c| (nodes.exitance_mean[c] - b).abs()).fold(0.0, f64::max);
+    nodes.area[receiver] as f64 * nodes.reflectance_max[receiver] as f64 * coefficient as f64 * spread
+}
+
+/// Whether a link is *near*: a cluster's self-link, or a link with a cluster end that is not
+/// `admissible` for the cluster formula. Near links are estimated with rays
+/// (`visibility::sampled_form_factor`) and their error is the bound `near_spread`.
+pub fn is_near(nodes: &Nodes, receiver: usize, source: usize) -> bool {
+    receiver == source || !admissible(nodes, receiver, source)
+}
+
+/// The form-factor bound that stands for a near link's error: F_RS ≤ 1 (the irradiance from a
+/// uniform source never exceeds its exitance) and F_RS = A_S F_SR / A_R ≤ A_S / A_R (reciprocity).
+pub fn near_spread(nodes: &Nodes, receiver: usize, source: usize) -> f32 {
+    if receiver == source {
+        return 1.0;
+    }
+    let (ar, a_s) = (nodes.area[receiver], nodes.area[source]);
+    if ar > 0.0 {
+        (a_s / ar).min(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// The total error of a link as refinement judges it (W): `link_error_power` plus
+/// `source_variation_power`, the latter with the form factor of a far link or the bound of a near one.
+pub fn refinement_error(nodes: &Nodes, link: &LinkRecord) -> f64 {
+    let (r, s) = (link.receiver as usize, link.source as usize);
+    let coefficient = if is_near(nodes, r, s) { link.spread } else { link.form_factor };
+    link_error_power(nodes, r, s, link.spread) + source_variation_power(nodes, r, s, coefficient)
 }
 
 /// Whether the point-to-point cluster formula may stand for link (receiver ← source) at all: always
 /// for two elements (their estimator is exact in the source); with a cluster end, only when the ends'
-/// bounding spheres are disjoint and neither sphere crosses an element end's plane. Refinement splits
-/// an inadmissible link whatever its error, so that no near pair of clusters is ever linked with a
-/// meaningless form factor (their sum could exceed 1 and the sweeps diverge).
+/// bounding spheres are disjoint and neither sphere crosses an element end's plane. Other links are
+/// near (`is_near`).
 pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
     if !nodes.is_cluster[receiver] && !nodes.is_cluster[source] {
         return true;
@@ -125,17 +164,27 @@ pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
     !(straddles(receiver, source) || straddles(source, receiver))
 }
 
-/// Estimates the form factor of link (receiver ← source) and its error spread; `None` when nothing can
-/// pass (the ends face away from each other, or no ray gets through and the estimate is reliable).
+/// Estimates the form factor of link (receiver ← source) and its error spread, the spread capped at
+/// `spread_cap` (the parent link's share); `None` when nothing can pass (the ends face away from each
+/// other, or no ray gets through and the estimate is reliable).
 ///
 /// - Element ← element: F = V · (1/3) Σ_k F_Lambert(x_k → S) over the receiver's quadrature points;
 ///   ΔF = V·ΔF_quadrature + 2·F̄·min(V, 1 − V) (receiver quadrature error, see
-///   `form_factor::element_to_element`, plus partial visibility).
-/// - With a cluster at either end: F = V · P_S P_R / (π d² A_R) (Sillion 1995), ΔF = the bound
-///   `cluster_form_factor_bound` times max(V, 1/(N+1)): the approximation itself is the error, as in
-///   the BF criterion; the bound is 1 when the ends' bounding spheres overlap or a sphere crosses an
-///   element end's plane.
-pub fn estimate(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source: usize) -> Option<(f32, f32)> {
+///   `form_factor::element_to_element`, plus partial visibility, so a significant link in a penumbra
+///   is refined).
+/// - Far links with a cluster end: F = V · P_S P_R / (π d² A_R) (Sillion 1995), ΔF = the bound
+///   `cluster_form_factor_bound` times max(V, 1/(N+1)): the approximation itself is the error.
+/// - Near links (`is_near`): ΔF = `near_spread`. When the link's error with that bound is above
+///   `threshold_w` it is about to be split and F is not estimated (NaN, so that a kept one is caught);
+///   otherwise F = `visibility::sampled_form_factor`, and `None` when no sample pair faces each other.
+pub fn estimate(
+    nodes: &Nodes,
+    ctx: &VisibilityContext,
+    receiver: usize,
+    source: usize,
+    spread_cap: f32,
+    threshold_w: f64,
+) -> Option<(f32, f32)> {
     if !nodes.is_cluster[receiver] && !nodes.is_cluster[source] {
         let (mean, error) =
             element_to_element(&nodes.corners[receiver], nodes.normal[receiver], &nodes.corners[source]);
@@ -148,7 +197,15 @@ pub fn estimate(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source:
         }
         let f = mean * v;
         let spread = error * v + 2.0 * mean * v.min(1.0 - v);
-        return Some((f as f32, spread as f32));
+        return Some((f as f32, (spread as f32).min(spread_cap)));
+    }
+    if is_near(nodes, receiver, source) {
+        let spread = near_spread(nodes, receiver, source).min(spread_cap);
+        let record = LinkRecord { receiver: receiver as u32, source: source as u32, form_factor: 0.0, spread };
+        if refinement_error(nodes, &record) > threshold_w {
+            return Some((f32::NAN, spread));
+        }
+        return near_form_factor(nodes, ctx, receiver, source).map(|f| (f, spread));
     }
     let (cr, cs) = (nodes.centre[receiver], nodes.centre[source]);
     let offset = cr - cs;
@@ -164,11 +221,7 @@ pub fn estimate(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source:
     let ps = projected(source, towards_receiver);
     let pr = projected(receiver, -towards_receiver);
     let f = cluster_form_factor(ps, pr, nodes.area[receiver], d);
-    let bound = if !admissible(nodes, receiver, source) {
-        1.0
-    } else {
-        cluster_form_factor_bound(f, d, nodes.radius[receiver] + nodes.radius[source])
-    };
+    let bound = cluster_form_factor_bound(f, d, nodes.radius[receiver] + nodes.radius[source]);
     if !(bound > 0.0) {
         return None;
     }
@@ -177,5 +230,56 @@ pub fn estimate(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source:
         return None;
     }
     let spread = bound * v.max(1.0 / (ctx.rays as f64 + 1.0));
-    Some(((f * v) as f32, spread as f32))
+    Some(((f * v) as f32, (spread as f32).min(spread_cap)))
+}
+
+/// Near links whose ends hold at most this many leaf-element pairs are integrated pair by pair.
+pub const EXACT_NEAR_PAIRS: usize = 64;
+
+/// The form factor of a near link that is kept; `None` when its ends cannot exchange light.
+///
+/// - At most `EXACT_NEAR_PAIRS` leaf pairs: F = V · Σ_r A_r Σ_s F_elem(r ← s) / A_R, the element
+///   estimator (Lambert exact in the source, three-point rule over the receiver) over every pair of
+///   leaf elements below the two ends, times the ray visibility fraction of the link; `None` when
+///   every pair's F is 0.
+/// - Larger: `visibility::sampled_form_factor`; `None` when no sample pair faces each other.
+pub fn near_form_factor(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source: usize) -> Option<f32> {
+    let (mut rs, mut ss) = (Vec::new(), Vec::new());
+    let small = leaves_below(nodes, receiver, EXACT_NEAR_PAIRS, &mut rs)
+        && leaves_below(nodes, source, EXACT_NEAR_PAIRS, &mut ss)
+        && rs.len() * ss.len() <= EXACT_NEAR_PAIRS;
+    if !small {
+        let (f, facing) = sampled_form_factor(ctx, nodes, receiver, source);
+        return (facing > 0).then_some(f as f32);
+    }
+    let mut sum = 0.0f64;
+    for &r in &rs {
+        for &s in &ss {
+            if r != s {
+                let (f, _) = element_to_element(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
+                sum += nodes.area[r] as f64 * f;
+            }
+        }
+    }
+    if !(sum > 0.0) {
+        return None;
+    }
+    let v = visible_fraction(ctx, nodes, receiver, source) as f64;
+    Some((v * sum / nodes.area[receiver] as f64).min(1.0) as f32)
+}
+
+/// Collects the leaf elements below `node` into `out`; false (and stops) past `limit` leaves.
+fn leaves_below(nodes: &Nodes, node: usize, limit: usize, out: &mut Vec<usize>) -> bool {
+    let mut stack = vec![node];
+    while let Some(n) = stack.pop() {
+        if nodes.is_leaf(n) {
+            if out.len() == limit {
+                return false;
+            }
+            out.push(n);
+        } else {
+            stack.extend(nodes.children(n));
+        }
+    }
+    true
 }

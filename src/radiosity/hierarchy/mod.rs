@@ -3,10 +3,19 @@
 //! on demand, links refined by the BF criterion (Hanrahan, Salzman and Aupperle 1991) under a memory
 //! budget, and Gauss-Seidel with overrelaxation over the hierarchy with push-pull.
 //!
-//! Entry point: [`solve`]. Form factors per link type (see `form_factor`): element ← element uses
-//! Lambert's exact point-to-polygon formula at three receiver quadrature points times ray visibility;
-//! links with a cluster end use Sillion's isotropic-cluster formula times ray visibility. The hemicube
-//! is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
+//! Entry point: [`solve`]. Refinement (see `refine`) compares each link's reflected-power error
+//! A_R·ρ_R·B_S·ΔF with ε·Ē·max(A_R, A_min): dark links are never refined, tiny input triangles are
+//! judged by power and served by their clusters, and near cluster pairs are linked lazily.
+//!
+//! Form factors per link type (see `links::estimate`):
+//! - element ← element: Lambert's exact point-to-polygon formula over a receiver quadrature (three
+//!   points; 48 when the two elements are near each other) times ray visibility;
+//! - far links with a cluster end: Sillion's isotropic-cluster formula times ray visibility;
+//! - near links (overlapping bounding spheres, a cluster straddling an element's plane, a cluster's
+//!   self-link): the element estimator summed over all leaf pairs when there are at most 64, else
+//!   Wallace et al.'s ray-traced disk estimator (`visibility::sampled_form_factor`).
+//!
+//! The hemicube is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
 
 pub mod clusters;
 pub mod form_factor;
@@ -50,9 +59,11 @@ pub enum HierarchyError {
 /// Settings of the hierarchical solver.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HierarchyParams {
-    /// ε: a link is refined while its error ρ_R·B_S·ΔF (W/m²) exceeds ε × the scene's mean emitted
-    /// exitance Σ A·E / Σ A over all surfaces (mean channel): the emitted power spread over every
-    /// surface, the scale of the first bounce, whatever the emitters' size and the scene's units.
+    /// ε: a link is refined while the power it may get wrong, A_R·ρ_R·B_S·ΔF_RS (W, see
+    /// `links::link_error_power`), exceeds ε × Ē × max(A_R, A_min), Ē the scene's mean emitted
+    /// exitance Σ A·E / Σ A (mean channel) and A_min the minimum element area: the exitance criterion
+    /// ρ·B·ΔF ≤ ε·Ē for receivers above A_min, a power criterion below it (see
+    /// `refine::RefineSettings::allowed_error_w`), so tiny input triangles do not multiply the links.
     pub error_threshold: f64,
     /// Elements are not subdivided below an area of (scene diagonal / this)².
     pub min_element_divisor: f32,
@@ -76,7 +87,7 @@ impl Default for HierarchyParams {
     /// output mesh.
     fn default() -> Self {
         HierarchyParams {
-            error_threshold: 0.1,
+            error_threshold: 5e-3,
             min_element_divisor: 200.0,
             visibility_rays: 8,
             relaxation: 1.1,
@@ -92,12 +103,12 @@ impl Default for HierarchyParams {
 impl HierarchyParams {
     /// Coarser threshold, fewer rays and passes: seconds on a Cornell box.
     pub fn preview() -> Self {
-        HierarchyParams { error_threshold: 0.3, visibility_rays: 4, refinement_passes: 2, ..Default::default() }
+        HierarchyParams { error_threshold: 2e-2, visibility_rays: 4, refinement_passes: 2, ..Default::default() }
     }
 
     /// Finer threshold and more visibility rays.
     pub fn final_quality() -> Self {
-        HierarchyParams { error_threshold: 0.03, visibility_rays: 16, ..Default::default() }
+        HierarchyParams { error_threshold: 2e-3, visibility_rays: 16, ..Default::default() }
     }
 
     fn validate(&self) -> Result<(), HierarchyError> {
@@ -127,8 +138,8 @@ impl HierarchyParams {
     }
 }
 
-/// What the solver did.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// What the solver did (also what `--stats` reports for a hierarchical pass one).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct HierarchyStats {
     pub input_triangles: usize,
     pub clusters: usize,
@@ -154,8 +165,10 @@ pub struct HierarchyStats {
     pub budget_exceeded: bool,
     /// Σ of link errors (watts) after each refinement pass, at the exitance that pass saw.
     pub error_after_pass_w: Vec<f64>,
-    /// The exitance ε is relative to (W/m², mean channel): emitted power / total area.
+    /// The exitance ε is relative to: emitted power / total area (W/m², mean channel).
     pub reference_exitance: f64,
+    /// Σ A·E over the input triangles (W, mean channel).
+    pub reference_power_w: f64,
 }
 
 /// Progress of a solve, for a progress bar or log lines.
@@ -226,16 +239,19 @@ pub fn solve(
     let diagonal = scene.diagonal();
     let ctx =
         VisibilityContext { accel: &accel, rays: params.visibility_rays, offset: diagonal * 1e-5, seed: params.seed };
-    let reference_exitance = mean_emitted_exitance(&nodes, &inputs);
+    let (reference_power_w, reference_exitance) = emitted_power(&nodes, &inputs);
+    let min_element_area = (diagonal / params.min_element_divisor).powi(2);
     let settings = RefineSettings {
         threshold: params.error_threshold * reference_exitance,
-        min_element_area: (diagonal / params.min_element_divisor).powi(2),
+        floor_area: min_element_area,
+        min_element_area,
         budget_bytes: params.memory_bytes,
     };
     let mut stats = HierarchyStats {
         input_triangles: inputs.node.len(),
         clusters: nodes.is_cluster.iter().filter(|&&c| c).count(),
         reference_exitance,
+        reference_power_w,
         ..Default::default()
     };
     solve::reset_to_emission(&mut nodes, root);
@@ -282,9 +298,9 @@ pub fn solve(
     Ok(solution(&nodes, &inputs, root, stats))
 }
 
-/// Σ A·E / Σ A over the input triangles (mean channel, W/m²); 1 when nothing emits (then every link
-/// error is 0 anyway).
-fn mean_emitted_exitance(nodes: &Nodes, inputs: &clusters::InputTriangles) -> f64 {
+/// (Σ A·E, Σ A·E / Σ A) over the input triangles (mean channel; W and W/m²); (1, 1) when nothing
+/// emits (then every link error is 0 anyway).
+fn emitted_power(nodes: &Nodes, inputs: &clusters::InputTriangles) -> (f64, f64) {
     let (mut power, mut area) = (0.0f64, 0.0f64);
     for &n in &inputs.node {
         let n = n as usize;
@@ -292,9 +308,9 @@ fn mean_emitted_exitance(nodes: &Nodes, inputs: &clusters::InputTriangles) -> f6
         area += nodes.area[n] as f64;
     }
     if power > 0.0 && area > 0.0 {
-        power / area
+        (power, power / area)
     } else {
-        1.0
+        (1.0, 1.0)
     }
 }
 

@@ -1,24 +1,46 @@
 //! Link refinement (Hanrahan, Salzman and Aupperle 1991; clusters as in Sillion 1995): a link whose
-//! error `links::link_error` exceeds the threshold is replaced by links from the children of its
+//! error `links::refinement_error` (W) exceeds `RefineSettings::allowed_error_w` is replaced by links from the children of its
 //! larger end, subdividing an element 1→4 when needed, until the error is small, the ends reach the
 //! minimum element area, or the memory budget is spent (then the coarser link is kept and the budget
 //! flag raised, never an allocation beyond it).
 
 use rayon::prelude::*;
 
-use super::links::{admissible, estimate, link_error, link_error_power, LinkRecord, Links, LINK_BYTES};
+use super::links::{
+    estimate, link_error_power, near_form_factor, refinement_error, source_variation_power, LinkRecord, Links,
+    LINK_BYTES,
+};
 use super::nodes::{Nodes, NODE_BYTES};
 use super::visibility::VisibilityContext;
 
 /// Settings of one refinement pass.
 #[derive(Clone, Copy, Debug)]
 pub struct RefineSettings {
-    /// Largest error a link may keep, in exitance units W/m² (ε × the brightest emitted exitance).
+    /// Largest error a link may keep per square metre of its receiver, W/m² (ε × the scene's mean
+    /// emitted exitance); see `allowed_error_w`.
     pub threshold: f64,
+    /// Receivers smaller than this area (m²) are judged by power: their allowed error is that of a
+    /// receiver of this area.
+    pub floor_area: f32,
     /// Elements are not split into children smaller than this area.
     pub min_element_area: f32,
     /// Bytes the nodes and links may take.
     pub budget_bytes: usize,
+}
+
+impl RefineSettings {
+    /// The error (W) a link to a receiver of area `receiver_area` may keep:
+    ///
+    /// ε_max = threshold · max(A_R, floor_area).
+    ///
+    /// Above the floor this is the exitance criterion ρ_R·B_S·ΔF ≤ ε·Ē (each receiver resolved to
+    /// the same relative accuracy, which the furnace and per-surface agreement need); below it, a
+    /// power criterion A_R·ρ_R·B_S·ΔF ≤ ε·Ē·A_floor, so that the many tiny input triangles of a
+    /// tessellated object are served by their clusters' links and the link count does not grow with
+    /// the triangle count. A dark link (B_S = 0 or ρ_R = 0) has error 0 and is never refined.
+    pub fn allowed_error_w(&self, receiver_area: f32) -> f64 {
+        self.threshold * receiver_area.max(self.floor_area) as f64
+    }
 }
 
 /// What a refinement pass produced.
@@ -53,11 +75,17 @@ enum Split {
     Source,
 }
 
-/// Refines `records` (already estimated links) and expands the self-links of `self_links` (clusters
-/// whose contents interact among themselves; a self-link is always split into the links between all
-/// pairs of its children). Breadth-first: each round estimates its new links in parallel (pure reads
-/// of `nodes`, in a fixed order) and then decides, serially and in order, which to split, so the result
-/// is the same for any thread count.
+/// Refines `records` (already estimated links) and the self-links of the clusters in `self_links`
+/// (clusters whose contents interact among themselves), which become near records first. A link
+/// whose `refinement_error` is above the threshold is split: a self-link into the links between all
+/// pairs of its cluster's children (and their own self-links), any other link at one end
+/// (`choose_split`). Links below it are kept, near ones with `links::near_form_factor`: dark links
+/// are never refined, and receivers below the floor area are judged by power, which bounds the links
+/// by the scene's power over the threshold rather than by its triangle count (Sillion 1995's lazy cluster linking).
+///
+/// Breadth-first: each round estimates its new links in parallel (pure reads of `nodes`, in a fixed
+/// order) and then decides, serially and in order, which to split, so the result is the same for any
+/// thread count.
 pub fn refine(
     nodes: &mut Nodes,
     ctx: &VisibilityContext,
@@ -66,41 +94,50 @@ pub fn refine(
     settings: &RefineSettings,
     on_round: &mut dyn FnMut(u32, usize, usize),
 ) -> RefineOutcome {
-    let mut out = RefineOutcome { error_before_w: total_error(nodes, &records), ..Default::default() };
-    let mut kept: Vec<LinkRecord> = Vec::with_capacity(records.len());
     let mut work = records;
-    let mut pending_self = self_links;
+    for c in self_links {
+        if nodes.is_cluster[c as usize] {
+            work.push(LinkRecord { receiver: c, source: c, form_factor: f32::NAN, spread: 1.0 });
+        }
+    }
+    let mut out = RefineOutcome { error_before_w: total_error(nodes, &work), ..Default::default() };
+    let mut kept: Vec<LinkRecord> = Vec::with_capacity(work.len());
     loop {
         let mut next: Vec<Pending> = Vec::new();
-        let mut next_self = Vec::new();
-        for c in pending_self.drain(..) {
-            let children = nodes.children(c as usize);
-            for i in children.clone() {
-                for j in children.clone() {
-                    if i == j {
-                        if nodes.is_cluster[i] {
-                            next_self.push(i as u32);
-                        }
-                        // A flat element does not see itself.
-                    } else {
-                        next.push(Pending { receiver: i as u32, source: j as u32, spread_cap: f32::INFINITY });
-                    }
-                }
-            }
-        }
         // The links of this round still to be decided count against the budget too.
         let work_len = work.len();
         for link in work.drain(..) {
             let (r, s) = (link.receiver as usize, link.source as usize);
-            let geometric = link_error(nodes, r, s, link.spread);
-            let source_variation = source_variation_error(nodes, r, s, link.form_factor);
-            let must_split = !admissible(nodes, r, s);
-            if !must_split && !(geometric + source_variation > settings.threshold) {
-                kept.push(link);
+            if !(refinement_error(nodes, &link) > settings.allowed_error_w(nodes.area[r])) {
+                keep(nodes, ctx, link, &mut kept);
                 continue;
             }
-            let Some(side) = choose_split(nodes, r, s, settings.min_element_area, source_variation > geometric) else {
-                kept.push(link);
+            if r == s {
+                // A cluster's self-link: the pairs of its children, each child's own self-link included.
+                let children = nodes.children(r);
+                let bytes = budget_bytes(nodes.len(), kept.len() + next.len() + children.len().pow(2) + work_len);
+                if bytes > settings.budget_bytes {
+                    out.budget_exceeded = true;
+                    keep(nodes, ctx, link, &mut kept);
+                    continue;
+                }
+                out.peak_bytes = out.peak_bytes.max(bytes);
+                let parent_area = nodes.area[r] as f64;
+                for i in children.clone() {
+                    for j in children.clone() {
+                        if i == j && !nodes.is_cluster[i] {
+                            continue; // a flat element does not see itself
+                        }
+                        let share = (link.spread as f64 * nodes.area[j] as f64 / parent_area) as f32;
+                        next.push(Pending { receiver: i as u32, source: j as u32, spread_cap: share });
+                    }
+                }
+                continue;
+            }
+            let source_varies_most =
+                source_variation_power(nodes, r, s, link.form_factor) > link_error_power(nodes, r, s, link.spread);
+            let Some(side) = choose_split(nodes, r, s, settings.min_element_area, source_varies_most) else {
+                keep(nodes, ctx, link, &mut kept);
                 continue;
             };
             let split = match side {
@@ -109,11 +146,10 @@ pub fn refine(
             };
             let new_nodes = if nodes.is_leaf(split) { 4 } else { 0 };
             let child_links = if nodes.is_leaf(split) { 4 } else { nodes.children(split).len() };
-            let bytes = (nodes.len() + new_nodes) * NODE_BYTES
-                + (kept.len() + next.len() + child_links + work_len) * LINK_BYTES;
+            let bytes = budget_bytes(nodes.len() + new_nodes, kept.len() + next.len() + child_links + work_len);
             if bytes > settings.budget_bytes {
                 out.budget_exceeded = true;
-                kept.push(link);
+                keep(nodes, ctx, link, &mut kept);
                 continue;
             }
             out.peak_bytes = out.peak_bytes.max(bytes);
@@ -134,7 +170,7 @@ pub fn refine(
                 }
             }
         }
-        if next.is_empty() && next_self.is_empty() {
+        if next.is_empty() {
             break;
         }
         out.rounds += 1;
@@ -142,40 +178,47 @@ pub fn refine(
         out.estimated += next.len() as u64;
         let estimates: Vec<Option<(f32, f32)>> = {
             let nodes: &Nodes = nodes;
-            next.par_iter().map(|p| estimate(nodes, ctx, p.receiver as usize, p.source as usize)).collect()
+            next.par_iter()
+                .map(|p| {
+                    let (r, s) = (p.receiver as usize, p.source as usize);
+                    estimate(nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
+                })
+                .collect()
         };
         work = next
             .iter()
             .zip(estimates)
             .filter_map(|(p, e)| {
-                e.map(|(f, spread)| LinkRecord {
-                    receiver: p.receiver,
-                    source: p.source,
-                    form_factor: f,
-                    spread: spread.min(p.spread_cap),
-                })
+                e.map(|(f, spread)| LinkRecord { receiver: p.receiver, source: p.source, form_factor: f, spread })
             })
             .collect();
-        pending_self = next_self;
     }
     out.error_after_w = total_error(nodes, &kept);
-    out.peak_bytes = out.peak_bytes.max(nodes.len() * NODE_BYTES + kept.len() * LINK_BYTES);
+    out.peak_bytes = out.peak_bytes.max(budget_bytes(nodes.len(), kept.len()));
     out.links = Links::from_records(nodes.len(), kept);
     out
+}
+
+/// Keeps `link`; a near link that was not estimated (it was expected to split, but cannot or may not)
+/// gets its form factor now, and is dropped if its ends cannot exchange light.
+fn keep(nodes: &Nodes, ctx: &VisibilityContext, mut link: LinkRecord, kept: &mut Vec<LinkRecord>) {
+    if link.form_factor.is_nan() {
+        match near_form_factor(nodes, ctx, link.receiver as usize, link.source as usize) {
+            Some(f) => link.form_factor = f,
+            None => return,
+        }
+    }
+    kept.push(link);
+}
+
+/// Bytes `nodes` nodes and `links` link records take: each node also costs its row offset in `Links`.
+fn budget_bytes(nodes: usize, links: usize) -> usize {
+    nodes * (NODE_BYTES + std::mem::size_of::<u32>()) + links * LINK_BYTES
 }
 
 /// Σ over links of `link_error_power` (watts): the global error estimate.
 pub fn total_error(nodes: &Nodes, records: &[LinkRecord]) -> f64 {
     records.iter().map(|l| link_error_power(nodes, l.receiver as usize, l.source as usize, l.spread)).sum()
-}
-
-/// The part of a link's error that comes from the source's exitance varying over it (W/m²):
-/// ρ_R · F_RS · max_c |B_c − B_S| over the source's children (0 for a leaf source, whose exitance is
-/// one value). Splitting the source removes it.
-pub fn source_variation_error(nodes: &Nodes, receiver: usize, source: usize, form_factor: f32) -> f64 {
-    let b = nodes.exitance_mean[source];
-    let spread = nodes.children(source).map(|c| (nodes.exitance_mean[c] - b).abs()).fold(0.0, f64::max);
-    nodes.reflectance_max[receiver] as f64 * form_factor as f64 * spread
 }
 
 /// Which end to split. Element ← element links: the source when its exitance variation dominates the
@@ -192,7 +235,7 @@ fn choose_split(nodes: &Nodes, r: usize, s: usize, min_area: f32, source_varies_
             Some(Split::Source)
         } else if can(r) {
             Some(Split::Receiver)
-        } else if source_has_children && source_variation_error(nodes, r, s, 1.0) > 0.0 {
+        } else if source_has_children && source_variation_power(nodes, r, s, 1.0) > 0.0 {
             Some(Split::Source)
         } else {
             None

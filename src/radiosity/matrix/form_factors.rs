@@ -430,6 +430,11 @@ pub struct FormFactorEstimate {
 pub fn estimate(mesh: &Mesh, params: &RadiosityParams) -> FormFactorEstimate {
     let n = mesh.elements.len();
     let rows = (0..n).filter(|&i| needs_row(mesh, i)).count();
+    estimate_counts(n, rows, params)
+}
+
+/// `estimate` from the counts alone: n elements of which `rows` reflect or emit.
+pub fn estimate_counts(n: usize, rows: usize, params: &RadiosityParams) -> FormFactorEstimate {
     let res = Hemicube::new(params.hemicube_resolution_px).resolution_px() as f64;
     let per_row = (n as f64 / 2.0).min(0.85 * res * res);
     let nnz = (rows as f64 * per_row) as u64;

@@ -1,0 +1,325 @@
+//! The hierarchical pass-one method (issue 10): `hierarchy::solve` behind the `PassOneMethod`
+//! interface. It meshes adaptively, so it ignores the uniform mesh and returns the mesh of its leaf
+//! elements (`leaf_mesh`), with the hierarchy's conforming vertex exitance; the direct part pass two
+//! needs for `direct = "pixel"` is estimated per leaf with shadow rays to the emitters.
+//!
+//! Mirrors and glass: the hierarchy transports diffuse light only. A specular surface takes part in it
+//! with its diffuse Kd (often 0: it absorbs what reaches it) and blocks visibility; light reaching
+//! diffuse surfaces through mirrors and glass (the full matrix's extended form factors) is missing from
+//! the solution. Pass two still traces mirrors and glass and adds the photons' caustics in `final`.
+//! `method = "auto"` therefore keeps such scenes on the full matrix whenever it fits.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use super::fingerprint::Fnv1a64;
+use super::hierarchy::{self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyParams, HierarchyProgress};
+use super::leaf_mesh::{self, LeafGeometry, LeafMeshBuild};
+use super::method::{MethodError, PassOne, PassOneMethod, Reuse};
+use super::solution::Solution;
+use super::stats::{PassOneStats, SolveStats};
+use crate::accel::Accel;
+use crate::material::SceneTextures;
+use crate::mesh::Mesh;
+use crate::progress::Progress;
+use crate::rng::Pcg32;
+use crate::scene::{Material, Quality, SceneDescription, SolverKind};
+use crate::transport::emitters::Emitters;
+use crate::transport::photons::RunPhotons;
+
+/// Shadow rays per leaf for the direct part of its exitance.
+pub const DIRECT_SAMPLES: u32 = 16;
+
+/// The hierarchy's parameters from the scene: the preset's (`HierarchyParams::preview()`, `default()`
+/// or `final_quality()` for `quality`), then the `[radiosity]` keys: ε, minimum element size (as the
+/// diagonal's divisor), visibility rays, passes, the scene's tolerance and seed, and three quarters of
+/// `memory` for nodes and links (the rest is the scene, the ray accelerators and the output mesh).
+pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
+    let h = &scene.radiosity.hierarchy;
+    let defaults = match h.preset {
+        Quality::Preview => HierarchyParams::preview(),
+        Quality::Default => HierarchyParams::default(),
+        Quality::High => HierarchyParams::final_quality(),
+    };
+    let diagonal = scene.diagonal();
+    let min_element_divisor = match h.min_element_size {
+        Some(size) if size > 0.0 && diagonal > 0.0 => (diagonal / size).max(1.0),
+        _ => defaults.min_element_divisor,
+    };
+    HierarchyParams {
+        error_threshold: h.error_threshold.unwrap_or(defaults.error_threshold),
+        min_element_divisor,
+        visibility_rays: h.visibility_rays.unwrap_or(defaults.visibility_rays),
+        refinement_passes: h.refinement_passes.unwrap_or(defaults.refinement_passes),
+        tolerance: scene.radiosity.tolerance,
+        memory_bytes: usize::try_from(h.memory_bytes / 4 * 3).unwrap_or(usize::MAX),
+        seed: scene.radiosity.seed,
+        ..defaults
+    }
+}
+
+/// Bytes the hierarchy needs before any refinement (the input triangles, their clusters and the
+/// first links: `hierarchy::solve`'s own check), known from the scene alone.
+pub fn minimum_bytes(scene: &SceneDescription) -> u64 {
+    let triangles = hierarchy::count_input_triangles(scene) as u64;
+    2 * triangles * NODE_BYTES as u64 + 4 * triangles * LINK_BYTES as u64
+}
+
+/// What the hierarchy's links depend on: every surface's corners, sidedness and material index (which
+/// decides the smoothing groups), and the refinement settings. Material values are not in it.
+pub fn geometry_key(scene: &SceneDescription, params: &HierarchyParams) -> u64 {
+    let mut h = Fnv1a64::default();
+    h.write(b"hierarchy-geometry");
+    h.write_u64(scene.surfaces.len() as u64);
+    for s in &scene.surfaces {
+        h.write_u64(s.vertices.len() as u64);
+        h.write_f32s(s.vertices.iter().flat_map(|v| v.to_array()));
+        h.write(&[s.two_sided as u8]);
+        h.write(&s.material.to_le_bytes());
+    }
+    h.write_u64(params.error_threshold.to_bits());
+    h.write_f32s([params.min_element_divisor]);
+    h.write(&params.visibility_rays.to_le_bytes());
+    h.write(&params.refinement_passes.to_le_bytes());
+    h.write_u64(params.tolerance.to_bits());
+    h.write_u64(params.relaxation.to_bits());
+    h.write_u64(params.max_sweeps as u64);
+    h.write_u64(params.memory_bytes as u64);
+    h.write_u64(params.seed);
+    h.finish()
+}
+
+/// Identifies a hierarchical solution's scene: the geometry key and every material's Kd, Ke, Ks, Ni
+/// and transmittance (and the texture digest of a textured scene). A materials-only change keeps the
+/// geometry key and changes this.
+pub fn scene_fingerprint(scene: &SceneDescription, params: &HierarchyParams, textures: &SceneTextures) -> u64 {
+    let mut h = Fnv1a64::default();
+    h.write_u64(geometry_key(scene, params));
+    h.write_u64(scene.materials.len() as u64);
+    for m in &scene.materials {
+        h.write_f32s(material_values(m));
+    }
+    if textures.is_textured() {
+        h.write_u64(textures.digest());
+    }
+    h.finish()
+}
+
+fn material_values(m: &Material) -> [f32; 11] {
+    let (kd, ke, ks) = (m.diffuse_reflectance, m.emitted_radiance, m.specular_reflectance);
+    [kd.x, kd.y, kd.z, ke.x, ke.y, ke.z, ks.x, ks.y, ks.z, m.ior, m.transmittance]
+}
+
+/// Pass two's mesh and solution from a hierarchical solve (or from a saved one): the leaf mesh, its
+/// conforming vertex values, and the direct part estimated with shadow rays.
+pub fn solution_on_leaves(
+    scene: &SceneDescription,
+    geometry: LeafGeometry,
+    leaf_exitance: &[Vec3],
+    leaf_vertex_exitance: &[Vec3],
+    textures: Arc<SceneTextures>,
+    fingerprint: u64,
+    stats: SolveStats,
+) -> (Mesh, Solution) {
+    let LeafMeshBuild { mesh, back_vertices } = leaf_mesh::build(scene, &geometry, textures);
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let direct = sampled_direct_exitance(&mesh, &scene.materials, &accel, DIRECT_SAMPLES, scene.radiosity.seed);
+    let direct_f32: Vec<Vec3> = direct.iter().map(|v| v.as_vec3()).collect();
+    // The direct part is interpolated by area-weighted vertex means over the leaves (the back vertices
+    // then take their back leaf's interpolation, as for the total).
+    let direct_vertex = mesh.vertex_average(&direct);
+    let leaf_direct_vertex: Vec<Vec3> = direct_vertex[..geometry.positions.len()].iter().map(|v| v.as_vec3()).collect();
+    let solution = Solution {
+        element_exitance: leaf_exitance.to_vec(),
+        element_direct_exitance: direct_f32,
+        vertex_exitance: leaf_mesh::vertex_values(&geometry, leaf_vertex_exitance, &back_vertices),
+        vertex_direct_exitance: leaf_mesh::vertex_values(&geometry, &leaf_direct_vertex, &back_vertices),
+        mesh_fingerprint: fingerprint,
+        stats,
+        leaf_geometry: Some(Arc::new(geometry)),
+    };
+    (mesh, solution)
+}
+
+/// The mesh of a loaded hierarchical solution (its leaf geometry), or `None` for a uniform one.
+pub fn mesh_of(scene: &SceneDescription, solution: &Solution, textures: Arc<SceneTextures>) -> Option<Mesh> {
+    solution.leaf_geometry.as_ref().map(|g| leaf_mesh::build(scene, g, textures).mesh)
+}
+
+/// The direct part of each element's exitance, B_d,i = ρ_i·E_d(x_i), with the direct irradiance at
+/// its centre x_i estimated from `samples` shadow rays to points stratified over the emitters' area:
+///
+/// E_d(x) ≈ (A/K) Σ_k E_k cos θ_x cos θ_k / (π d_k²) · V(x, y_k)
+///
+/// (E_k the emitted exitance of the side of the emitter facing x, A the emitters' total area). Each
+/// element has its own random stream, so the result does not depend on the thread count.
+pub fn sampled_direct_exitance(
+    mesh: &Mesh,
+    materials: &[Material],
+    accel: &Accel,
+    samples: u32,
+    seed: u64,
+) -> Vec<DVec3> {
+    let emitters = Emitters::new(mesh, materials);
+    let e = &mesh.elements;
+    if emitters.is_empty() || samples == 0 {
+        return vec![DVec3::ZERO; e.len()];
+    }
+    let diagonal = {
+        let (lo, hi) =
+            mesh.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        (hi - lo).length()
+    };
+    let offset = diagonal * 1e-5;
+    (0..e.len())
+        .into_par_iter()
+        .map(|i| {
+            let rho = e.reflectance[i];
+            if rho.max_element() <= 0.0 {
+                return DVec3::ZERO;
+            }
+            let (n, origin) = (e.normal[i], e.centre[i] + e.normal[i] * offset);
+            let mut rng = Pcg32::new(seed ^ 0x6469_7265_6374, i as u64);
+            let mut irradiance = DVec3::ZERO;
+            for k in 0..samples {
+                let xi = (k as f32 + rng.next_f32()) / samples as f32;
+                let Some(sample) = emitters.sample(mesh, xi, rng.next_f32()) else { break };
+                let to_light = sample.point - origin;
+                let dist2 = to_light.length_squared();
+                if !(dist2 > 0.0) {
+                    continue;
+                }
+                let dist = dist2.sqrt();
+                let w = to_light / dist;
+                let cos_here = n.dot(w);
+                let t = sample.triangle as usize;
+                let cos_front = -e.normal[mesh.triangle_element[t] as usize].dot(w);
+                let Some(emitter) = mesh.side_element(t, cos_front > 0.0) else { continue };
+                if cos_here <= 0.0 || accel.occluded(origin, w, dist * (1.0 - 1e-4)) {
+                    continue;
+                }
+                let g = cos_here * cos_front.abs() / (std::f32::consts::PI * dist2);
+                irradiance += (e.emission[emitter] * g * sample.inverse_density).as_dvec3();
+            }
+            rho.as_dvec3() * irradiance / samples as f64
+        })
+        .collect()
+}
+
+/// Hierarchical radiosity with clustering and adaptive subdivision (`radiosity::hierarchy`).
+#[derive(Clone, Copy, Debug)]
+pub struct Hierarchical;
+
+impl PassOneMethod for Hierarchical {
+    fn name(&self) -> String {
+        "hierarchical".to_string()
+    }
+
+    fn uses_uniform_mesh(&self) -> bool {
+        false
+    }
+
+    /// The hierarchy's minimum (input triangles, clusters, first links) against its share of
+    /// `memory`, from the scene alone; refinement then stays within the budget by keeping coarser
+    /// links.
+    fn check_memory(&self, scene: &SceneDescription, _mesh: &Mesh) -> Result<(), MethodError> {
+        let params = hierarchy_params(scene);
+        let needed = minimum_bytes(scene);
+        if needed > params.memory_bytes as u64 {
+            const GIB: f64 = (1u64 << 30) as f64;
+            return Err(MethodError::HierarchyOverBudget {
+                scene: scene.path.display().to_string(),
+                triangles: hierarchy::count_input_triangles(scene),
+                needed_gib: needed as f64 / GIB,
+                budget_gib: scene.radiosity.hierarchy.memory_bytes as f64 / GIB,
+            });
+        }
+        Ok(())
+    }
+
+    fn solution_key(&self, scene: &SceneDescription, mesh: &Mesh) -> u64 {
+        scene_fingerprint(scene, &hierarchy_params(scene), &mesh.textures)
+    }
+
+    fn solve(
+        &self,
+        scene: &SceneDescription,
+        mesh: Mesh,
+        _reuse: &mut Reuse,
+        _photons: &RunPhotons,
+        progress: &Progress,
+    ) -> Result<PassOne, MethodError> {
+        self.check_memory(scene, &mesh)?;
+        let params = hierarchy_params(scene);
+        let stage = progress.stage("hierarchy", params.refinement_passes as u64, "passes");
+        let start = Instant::now();
+        let mut memory_bytes = 0usize;
+        let solved = hierarchy::solve(scene, &params, &mut |p| match p {
+            HierarchyProgress::Refining { pass, round, links, nodes } => {
+                memory_bytes = nodes * NODE_BYTES + links * LINK_BYTES;
+                stage.set_position(pass.saturating_sub(1) as u64);
+                stage.set_message(format!(
+                    "pass {pass} refining, round {round}: {nodes} nodes, {links} links, {:.0} MiB",
+                    memory_bytes as f64 / (1 << 20) as f64
+                ));
+            }
+            HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
+                let relative = if max_exitance > 0.0 { max_change / max_exitance } else { 0.0 };
+                stage.set_message(format!(
+                    "pass {pass} sweep {sweep}: change {relative:.2e}, {:.0} MiB",
+                    memory_bytes as f64 / (1 << 20) as f64
+                ));
+            }
+        })
+        .map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?;
+        let solve_seconds = start.elapsed().as_secs_f64();
+        let h = &solved.stats;
+        stage.finish(&format!(
+            "{} input triangles, {} clusters → {} elements, {} links, {} passes, {} sweeps, peak {:.1} MiB{}",
+            h.input_triangles,
+            h.clusters,
+            h.elements,
+            h.links,
+            h.refinement_passes,
+            h.sweeps,
+            h.peak_bytes as f64 / (1 << 20) as f64,
+            if h.budget_exceeded { " (memory budget reached: coarser links kept)" } else { "" }
+        ));
+        let geometry = LeafGeometry {
+            positions: solved.mesh.positions.clone(),
+            triangles: solved.mesh.triangles.clone(),
+            surface: solved.leaf_surface.clone(),
+            back: solved.leaf_back.clone(),
+        };
+        let solve_stats = SolveStats {
+            solver: SolverKind::GaussSeidel,
+            iterations: h.sweeps,
+            residual_history: h.error_after_pass_w.clone(),
+            converged: h.converged,
+        };
+        let fingerprint = scene_fingerprint(scene, &params, &mesh.textures);
+        let direct_stage = progress.stage("direct part", 1, "leaves");
+        let (leaf_mesh, solution) = solution_on_leaves(
+            scene,
+            geometry,
+            &solved.leaf_exitance,
+            &solved.mesh.vertex_exitance,
+            mesh.textures.clone(),
+            fingerprint,
+            solve_stats,
+        );
+        direct_stage.finish(&format!("{DIRECT_SAMPLES} shadow rays per leaf"));
+        let stats = PassOneStats {
+            elements: leaf_mesh.elements.len(),
+            solver: Some(self.name()),
+            sweeps: h.sweeps,
+            solve_seconds,
+            hierarchy: Some(h.clone()),
+            ..Default::default()
+        };
+        Ok(PassOne { mesh: leaf_mesh, solution, stats, reused_form_factors: false })
+    }
+}
