@@ -8,7 +8,7 @@ use crate::output::ToneCurve;
 use crate::progress::Progress;
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, RunStats, Runner, Work};
 use crate::scene::overrides::{CameraOverride, MaterialOverride};
-use crate::scene::{DirectMode, Overrides, Quality};
+use crate::scene::{DirectMode, FinalGatherMode, Overrides, Quality};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -52,6 +52,7 @@ struct JobEntry {
     spp: Option<u32>,
     seed: Option<u64>,
     direct: Option<DirectMode>,
+    final_gather: Option<FinalGatherMode>,
     quality: Option<Quality>,
     exposure: Option<f32>,
     tone: Option<ToneCurve>,
@@ -180,6 +181,7 @@ fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
         samples_per_pixel: entry.spp,
         seed: entry.seed,
         direct: entry.direct,
+        final_gather: entry.final_gather,
         quality: entry.quality,
         camera: entry.camera.clone(),
         materials,

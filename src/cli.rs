@@ -62,6 +62,21 @@ pub enum DirectArg {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FinalGatherArg {
+    Off,
+    On,
+}
+
+impl From<FinalGatherArg> for FinalGatherMode {
+    fn from(g: FinalGatherArg) -> Self {
+        match g {
+            FinalGatherArg::Off => FinalGatherMode::Off,
+            FinalGatherArg::On => FinalGatherMode::On,
+        }
+    }
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum QualityArg {
     Preview,
     Default,
@@ -87,6 +102,9 @@ pub struct OverrideArgs {
     /// Direct light from the radiosity mesh, or sampled per pixel with shadow rays.
     #[arg(long, value_enum)]
     pub direct: Option<DirectArg>,
+    /// Final gather of the indirect light over the radiosity solution in the final image.
+    #[arg(long, value_enum)]
+    pub final_gather: Option<FinalGatherArg>,
     /// A named preset of element size, hemicube resolution, samples and light samples.
     #[arg(long, value_enum)]
     pub quality: Option<QualityArg>,
@@ -182,7 +200,7 @@ use crate::compare;
 use crate::output::{self, ToneCurve};
 use crate::progress::{Progress, Verbosity};
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
-use crate::scene::{DirectMode, Overrides, Quality};
+use crate::scene::{DirectMode, FinalGatherMode, Overrides, Quality};
 
 impl From<QualityArg> for Quality {
     fn from(q: QualityArg) -> Self {
@@ -212,6 +230,7 @@ impl OverrideArgs {
             samples_per_pixel: self.spp,
             seed: self.seed,
             direct: self.direct.map(Into::into),
+            final_gather: self.final_gather.map(Into::into),
             quality: self.quality.map(Into::into),
             ..Default::default()
         }

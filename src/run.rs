@@ -21,8 +21,9 @@ use crate::radiosity::method::{self, MethodError, Reuse};
 use crate::radiosity::solution_file::SolutionFileError;
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
-use crate::scene::{self, Overrides, SceneDescription, SceneError};
+use crate::scene::{self, FinalGatherMode, Overrides, SceneDescription, SceneError};
 use crate::trace::camera::PinholeCamera;
+use crate::trace::gather;
 use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
 use crate::trace::TraceError;
 use crate::transport::photons::RunPhotons;
@@ -388,6 +389,15 @@ pub fn render(
     let tracer = match caustics {
         Some(photons) => tracer.with_caustics(photons),
         None => tracer,
+    };
+    let tracer = if mode == TraceMode::Final && scene.render.final_gather == FinalGatherMode::On {
+        let stage = progress.stage("final gather prepass", 1, "caches");
+        let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad);
+        stats.secondary_rays += prepass.rays.total();
+        stage.finish(&format!("{} records from {} gathers", prepass.records, prepass.candidates));
+        tracer.with_final_gather(gather)
+    } else {
+        tracer
     };
     let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
     let stage = progress.stage(

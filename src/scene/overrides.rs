@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{check_camera, check_material, DirectMode, Quality, SceneDescription};
+use super::{check_camera, check_material, DirectMode, FinalGatherMode, Quality, SceneDescription};
 
 /// A batch job's new camera values (each optional).
 #[derive(Clone, Debug, Default, PartialEq, serde::Deserialize)]
@@ -34,6 +34,8 @@ pub struct Overrides {
     /// Seed of the film's and the hemicubes' random numbers.
     pub seed: Option<u64>,
     pub direct: Option<DirectMode>,
+    /// Final gather on or off (`[render] final_gather`).
+    pub final_gather: Option<FinalGatherMode>,
     /// A named preset, applied before the single values.
     pub quality: Option<Quality>,
     pub camera: Option<CameraOverride>,
@@ -75,6 +77,9 @@ impl Overrides {
         }
         if let Some(d) = self.direct {
             scene.render.direct = d;
+        }
+        if let Some(g) = self.final_gather {
+            scene.render.final_gather = g;
         }
         if let Some(c) = &self.camera {
             let cam = &mut scene.camera;
