@@ -48,23 +48,27 @@ impl IrradianceRecord {
     }
 }
 
-/// Records in insertion order, with a uniform grid over their spheres of validity (radius a·R_i),
-/// rebuilt by `index`.
+/// Records in insertion order, with nested uniform grids over their spheres of validity (radius
+/// a·R_i), rebuilt by `index`.
 #[derive(Clone, Debug)]
 pub struct IrradianceCache {
     /// a: the largest error weight 1/w accepted (0.1–0.3 is Ward's usual range).
     accuracy: f32,
     records: Vec<IrradianceRecord>,
-    /// Records `index` has put in the grid (the first `indexed` of `records`).
+    /// Records `index` has put in the grids (the first `indexed` of `records`).
     indexed: usize,
+    /// Cell size of grid level 0; level l has cells GRID_LEVEL_RATIO^l times larger.
     cell_size: f32,
-    grid: HashMap<IVec3, Vec<u32>>,
-    /// Records whose sphere covers too many cells are checked at every lookup.
-    large: Vec<u32>,
+    /// (level, cell) → records whose sphere overlaps the cell, in insertion order. A record goes to the
+    /// finest level on which it spans at most MAX_CELLS_PER_AXIS cells per axis.
+    grid: HashMap<(u32, IVec3), Vec<u32>>,
+    levels: u32,
 }
 
-/// A record spanning more cells than this per axis goes to the list checked at every lookup.
-const MAX_CELLS_PER_AXIS: i32 = 6;
+/// A record spans at most this many cells per axis on its grid level.
+const MAX_CELLS_PER_AXIS: i32 = 4;
+/// Cell size ratio between grid levels.
+const GRID_LEVEL_RATIO: f32 = 4.0;
 
 /// The "in front" test's tolerance, as a fraction of the record's reach a·R_i.
 const FRONT_TOLERANCE: f32 = 0.05;
@@ -73,14 +77,7 @@ impl IrradianceCache {
     /// An empty cache of accuracy a ∈ (0, 1].
     pub fn new(accuracy: f32) -> IrradianceCache {
         assert!(accuracy > 0.0 && accuracy <= 1.0, "the accuracy is validated by the scene parser");
-        IrradianceCache {
-            accuracy,
-            records: Vec::new(),
-            indexed: 0,
-            cell_size: 1.0,
-            grid: HashMap::new(),
-            large: Vec::new(),
-        }
+        IrradianceCache { accuracy, records: Vec::new(), indexed: 0, cell_size: 1.0, grid: HashMap::new(), levels: 0 }
     }
 
     pub fn len(&self) -> usize {
@@ -102,12 +99,15 @@ impl IrradianceCache {
     /// Adds the gather at (p, n); lookups see it after the next `index`. Its radius is the harmonic
     /// mean distance, limited by the translation gradient (R ≤ E/|∇_t E|, Křivánek et al. 2005: the
     /// linear extrapolation must not change the value by more than itself within R) and clamped to
-    /// [min_radius, max_radius] (scene units; the prepass sets them from the pixel footprint).
+    /// [min_radius, max_radius] (scene units; the prepass sets them from the pixel footprint). Where
+    /// the clamp raises R above E/|∇_t E| (a gather right against other geometry, whose nearest cells
+    /// make the gradient huge), the gradient is scaled down to |∇_t E| = E/R, so that no extrapolation
+    /// within the record's reach more than doubles or zeroes it.
     pub fn insert(
         &mut self,
         position: Vec3,
         normal: Vec3,
-        estimate: HemisphereEstimate,
+        mut estimate: HemisphereEstimate,
         min_radius: f32,
         max_radius: f32,
     ) {
@@ -119,33 +119,40 @@ impl IrradianceCache {
             }
         }
         let radius = radius.min(max_radius).max(min_radius).max(f32::MIN_POSITIVE);
+        for c in 0..3 {
+            let slope = estimate.translation_gradient[c].length();
+            let limit = estimate.irradiance[c].max(0.0) / radius;
+            if slope > limit {
+                estimate.translation_gradient[c] *= limit / slope;
+            }
+        }
         self.records.push(IrradianceRecord { position, normal, estimate, radius });
     }
 
-    /// Rebuilds the grid over all records, its cell the median reach a·R_i (so most records touch a
-    /// few cells). Deterministic: records enter every list in insertion order.
+    /// Rebuilds the grids over all records, level 0's cell twice the smallest reach a·R_i.
+    /// Deterministic: records enter every list in insertion order.
     pub fn index(&mut self) {
-        let mut reach: Vec<f32> = self.records.iter().map(|r| self.accuracy * r.radius).collect();
-        if reach.is_empty() {
+        let Some(smallest) = self.records.iter().map(|r| self.accuracy * r.radius).min_by(f32::total_cmp) else {
             return;
-        }
-        let middle = reach.len() / 2;
-        reach.select_nth_unstable_by(middle, f32::total_cmp);
-        self.cell_size = (2.0 * reach[middle]).max(f32::MIN_POSITIVE);
+        };
+        self.cell_size = (2.0 * smallest).max(f32::MIN_POSITIVE);
         self.grid.clear();
-        self.large.clear();
+        self.levels = 0;
         for (index, record) in self.records.iter().enumerate() {
-            let reach = self.accuracy * record.radius;
-            let lo = self.cell(record.position - Vec3::splat(reach));
-            let hi = self.cell(record.position + Vec3::splat(reach));
-            if (hi - lo).max_element() >= MAX_CELLS_PER_AXIS {
-                self.large.push(index as u32);
-                continue;
-            }
+            let reach = Vec3::splat(self.accuracy * record.radius);
+            let mut level = 0;
+            let (lo, hi) = loop {
+                let (lo, hi) = (self.cell(level, record.position - reach), self.cell(level, record.position + reach));
+                if (hi - lo).max_element() < MAX_CELLS_PER_AXIS || level >= 30 {
+                    break (lo, hi);
+                }
+                level += 1;
+            };
+            self.levels = self.levels.max(level + 1);
             for x in lo.x..=hi.x {
                 for y in lo.y..=hi.y {
                     for z in lo.z..=hi.z {
-                        self.grid.entry(IVec3::new(x, y, z)).or_default().push(index as u32);
+                        self.grid.entry((level, IVec3::new(x, y, z))).or_default().push(index as u32);
                     }
                 }
             }
@@ -153,8 +160,8 @@ impl IrradianceCache {
         self.indexed = self.records.len();
     }
 
-    fn cell(&self, p: Vec3) -> IVec3 {
-        (p / self.cell_size).floor().as_ivec3()
+    fn cell(&self, level: u32, p: Vec3) -> IVec3 {
+        (p / (self.cell_size * GRID_LEVEL_RATIO.powi(level as i32))).floor().as_ivec3()
     }
 
     /// Whether some indexed record serves (p, n): w_i > 1/a and not in front.
@@ -167,7 +174,7 @@ impl IrradianceCache {
     /// The interpolated irradiance at (p, n), E(p) = Σ w_i E_i(p) / Σ w_i over the indexed records
     /// serving it (E_i(p) = `IrradianceRecord::extrapolate`), with w_i Ward's weight less its threshold
     /// 1/a so that a record fades out at the edge of its validity instead of stopping short; `None`
-    /// when none serves. Records are summed in insertion order (grid cell, then the large list), so the
+    /// when none serves. Records are summed level by level, each cell in insertion order, so the
     /// value does not depend on who asks.
     pub fn lookup(&self, p: Vec3, n: Vec3) -> Option<Vec3> {
         let mut weighted = Vec3::ZERO;
@@ -189,13 +196,11 @@ impl IrradianceCache {
                 visit(record, w);
             }
         };
-        if self.indexed == 0 {
-            return;
+        for level in 0..self.levels {
+            if let Some(list) = self.grid.get(&(level, self.cell(level, p))) {
+                list.iter().for_each(|&i| consider(i));
+            }
         }
-        if let Some(list) = self.grid.get(&self.cell(p)) {
-            list.iter().for_each(|&i| consider(i));
-        }
-        self.large.iter().for_each(|&i| consider(i));
     }
 }
 
