@@ -184,9 +184,9 @@ pub struct RenderParams {
 impl Default for RenderParams {
     fn default() -> Self {
         RenderParams {
-            direct: DirectMode::Radiosity,
-            final_gather: FinalGatherMode::Off,
-            gather_rays: 256,
+            direct: DirectMode::Pixel,
+            final_gather: FinalGatherMode::On,
+            gather_rays: 1024,
             cache_accuracy: 0.15,
             light_samples: 4,
             max_depth: 8,
@@ -358,8 +358,8 @@ impl Quality {
     pub fn gather_settings(self) -> (FinalGatherMode, u32, f32) {
         match self {
             Quality::Preview => (FinalGatherMode::Off, 64, 0.3),
-            Quality::Default => (FinalGatherMode::Off, 256, 0.15),
-            Quality::High => (FinalGatherMode::Off, 1024, 0.1),
+            Quality::Default => (FinalGatherMode::On, 1024, 0.15),
+            Quality::High => (FinalGatherMode::On, 2048, 0.1),
         }
     }
 }
