@@ -10,7 +10,7 @@ use crate::output::{Exposure, ToneCurve};
 use crate::progress::Progress;
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
 use crate::scene::overrides::{CameraOverride, MaterialOverride};
-use crate::scene::{DirectMode, MethodChoice, Overrides, Quality};
+use crate::scene::{DirectMode, FinalGatherMode, MethodChoice, Overrides, Quality};
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -74,6 +74,7 @@ struct JobEntry {
     spp: Option<u32>,
     seed: Option<u64>,
     direct: Option<DirectMode>,
+    final_gather: Option<FinalGatherMode>,
     quality: Option<Quality>,
     /// The pass-one method, as the scene's `[radiosity] method`.
     #[serde(default)]
@@ -275,6 +276,7 @@ fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
         samples_per_pixel: entry.spp,
         seed: entry.seed,
         direct: entry.direct,
+        final_gather: entry.final_gather,
         quality: entry.quality,
         method: entry.method,
         camera: entry.camera.clone(),

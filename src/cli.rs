@@ -71,6 +71,21 @@ pub enum MethodArg {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FinalGatherArg {
+    Off,
+    On,
+}
+
+impl From<FinalGatherArg> for FinalGatherMode {
+    fn from(g: FinalGatherArg) -> Self {
+        match g {
+            FinalGatherArg::Off => FinalGatherMode::Off,
+            FinalGatherArg::On => FinalGatherMode::On,
+        }
+    }
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum QualityArg {
     Preview,
     Default,
@@ -96,6 +111,9 @@ pub struct OverrideArgs {
     /// Direct light from the radiosity mesh, or sampled per pixel with shadow rays.
     #[arg(long, value_enum)]
     pub direct: Option<DirectArg>,
+    /// Final gather of the indirect light over the radiosity solution in the final image.
+    #[arg(long, value_enum)]
+    pub final_gather: Option<FinalGatherArg>,
     /// A named preset of element size, hemicube resolution, samples and light samples.
     #[arg(long, value_enum)]
     pub quality: Option<QualityArg>,
@@ -212,7 +230,7 @@ use crate::compare;
 use crate::output::{self, Exposure, ToneCurve};
 use crate::progress::{Progress, Verbosity};
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
-use crate::scene::{DirectMode, MethodChoice, Overrides, Quality};
+use crate::scene::{DirectMode, FinalGatherMode, MethodChoice, Overrides, Quality};
 
 impl From<QualityArg> for Quality {
     fn from(q: QualityArg) -> Self {
@@ -252,6 +270,7 @@ impl OverrideArgs {
             samples_per_pixel: self.spp,
             seed: self.seed,
             direct: self.direct.map(Into::into),
+            final_gather: self.final_gather.map(Into::into),
             quality: self.quality.map(Into::into),
             method: self.method.map(Into::into),
             ..Default::default()

@@ -26,8 +26,9 @@ use crate::radiosity::method::{self, MethodError, Reuse};
 use crate::radiosity::solution_file::{self, SolutionFileError};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
-use crate::scene::{self, Overrides, SceneDescription, SceneError};
+use crate::scene::{self, FinalGatherMode, Overrides, SceneDescription, SceneError};
 use crate::trace::camera::PinholeCamera;
+use crate::trace::gather;
 use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
 use crate::trace::TraceError;
 use crate::transport::photons::RunPhotons;
@@ -465,7 +466,7 @@ pub fn render(
 ) -> Result<Image, TraceError> {
     let image = &scene.image;
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
-    let tracer = tracer_for(scene, mesh, accel, solution, mode, photons)?;
+    let tracer = tracer_for(scene, mesh, accel, solution, mode, photons, progress, stats)?;
     let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
     let stage = progress.stage(
         if mode == TraceMode::Final { "render final" } else { "render radiosity" },
@@ -506,6 +507,7 @@ pub fn render(
 
 /// Pass two's tracer for a scene, its mesh and solution: smooth-shading normals, the texture
 /// footprint of one pixel, and the run's `photons` as caustics in the final mode.
+#[allow(clippy::too_many_arguments)]
 pub fn tracer_for<'a>(
     scene: &'a SceneDescription,
     mesh: &'a Mesh,
@@ -513,8 +515,11 @@ pub fn tracer_for<'a>(
     solution: &'a Solution,
     mode: TraceMode,
     photons: &RunPhotons,
+    progress: &Progress,
+    stats: &mut RunStats,
 ) -> Result<Tracer<'a>, TraceError> {
-    let pixel_angle_rad = scene.camera.vfov_deg.to_radians() / scene.image.height_px.max(1) as f32;
+    let image = &scene.image;
+    let pixel_angle_rad = scene.camera.vfov_deg.to_radians() / image.height_px.max(1) as f32;
     let tracer = Tracer::new(mesh, accel, solution, &scene.materials, &scene.render)?
         .with_shading_normals(&scene.surfaces)
         .with_pixel_angle(pixel_angle_rad);
@@ -522,10 +527,19 @@ pub fn tracer_for<'a>(
         TraceMode::Final => photons.get(mesh, accel, &scene.materials, &scene.surfaces),
         TraceMode::Radiosity => None,
     };
-    Ok(match caustics {
+    let tracer = match caustics {
         Some(photons) => tracer.with_caustics(photons),
         None => tracer,
-    })
+    };
+    if mode != TraceMode::Final || scene.render.final_gather != FinalGatherMode::On {
+        return Ok(tracer);
+    }
+    let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
+    let stage = progress.stage("final gather prepass", 1, "caches");
+    let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad);
+    stats.secondary_rays += prepass.rays.total();
+    stage.finish(&format!("{} records from {} gathers", prepass.records, prepass.candidates));
+    Ok(tracer.with_final_gather(gather))
 }
 
 /// Peak resident memory of this process so far (Linux `VmHWM`), 0 if unknown.

@@ -41,7 +41,7 @@ pub fn write_layers(
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let image = &scene.image;
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
-    let tracer = tracer_for(scene, mesh, &accel, solution, TraceMode::Final, photons)?;
+    let tracer = tracer_for(scene, mesh, &accel, solution, TraceMode::Final, photons, progress, stats)?;
     let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
     let stage = progress.stage("render layers", tiles as u64, "tiles");
     let start = Instant::now();

@@ -239,10 +239,28 @@ pub enum DirectMode {
     Pixel,
 }
 
+/// Whether pass two gathers the indirect light at the diffuse points it shows (`trace::gather`), or
+/// reads it from the interpolated solution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FinalGatherMode {
+    /// The indirect light is the solution's, Gouraud-interpolated over the elements.
+    Off,
+    /// A final gather over the solution at every diffuse point, through the irradiance cache.
+    On,
+}
+
 /// Settings of pass two.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderParams {
     pub direct: DirectMode,
+    /// Final gather of the indirect light in the final image.
+    pub final_gather: FinalGatherMode,
+    /// Rays per gather (stratified over the cosine-weighted hemisphere).
+    pub gather_rays: u32,
+    /// The irradiance cache's accuracy a (Ward's largest error weight); 0 gathers at every diffuse hit
+    /// with no cache.
+    pub cache_accuracy: f32,
     /// Shadow rays per diffuse hit when `direct = Pixel` (and per Phong highlight), shared by all
     /// emitters: each ray goes to a point chosen over the emitters' total area, not one per emitter.
     pub light_samples: u32,
@@ -253,7 +271,15 @@ pub struct RenderParams {
 
 impl Default for RenderParams {
     fn default() -> Self {
-        RenderParams { direct: DirectMode::Radiosity, light_samples: 4, max_depth: 8, min_throughput: 1e-3 }
+        RenderParams {
+            direct: DirectMode::Pixel,
+            final_gather: FinalGatherMode::On,
+            gather_rays: 1024,
+            cache_accuracy: 0.15,
+            light_samples: 4,
+            max_depth: 8,
+            min_throughput: 1e-3,
+        }
     }
 }
 
@@ -416,6 +442,15 @@ impl Quality {
             Quality::High => (70.0, 256, 64, 16),
         }
     }
+
+    /// (final gather, gather rays, cache accuracy)
+    pub fn gather_settings(self) -> (FinalGatherMode, u32, f32) {
+        match self {
+            Quality::Preview => (FinalGatherMode::Off, 64, 0.3),
+            Quality::Default => (FinalGatherMode::On, 1024, 0.15),
+            Quality::High => (FinalGatherMode::On, 2048, 0.1),
+        }
+    }
 }
 
 impl SceneDescription {
@@ -429,7 +464,7 @@ impl SceneDescription {
         (hi - lo).length()
     }
 
-    /// Sets element size, hemicube resolution, samples and light samples from a preset.
+    /// Sets element size, hemicube resolution, samples, light samples and the final gather from a preset.
     pub fn apply_quality(&mut self, quality: Quality) {
         let (divisor, resolution, spp, light_samples) = quality.settings();
         self.radiosity.max_element_edge = self.diagonal() / divisor;
@@ -438,5 +473,9 @@ impl SceneDescription {
         self.image.adaptive_max_samples = self.image.adaptive_max_samples.max(spp);
         self.render.light_samples = light_samples;
         self.radiosity.hierarchy.preset = quality;
+        let (final_gather, gather_rays, cache_accuracy) = quality.gather_settings();
+        self.render.final_gather = final_gather;
+        self.render.gather_rays = gather_rays;
+        self.render.cache_accuracy = cache_accuracy;
     }
 }

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{check_camera, check_material, DirectMode, MethodChoice, Quality, SceneDescription};
+use super::{check_camera, check_material, DirectMode, FinalGatherMode, MethodChoice, Quality, SceneDescription};
 
 /// A batch job's new camera values (each optional).
 #[derive(Clone, Debug, Default, PartialEq, serde::Deserialize)]
@@ -34,6 +34,8 @@ pub struct Overrides {
     /// Seed of the film's and the hemicubes' random numbers.
     pub seed: Option<u64>,
     pub direct: Option<DirectMode>,
+    /// Final gather on or off (`[render] final_gather`).
+    pub final_gather: Option<FinalGatherMode>,
     /// A named preset, applied before the single values.
     pub quality: Option<Quality>,
     /// The pass-one method (`[radiosity] method`).
@@ -80,6 +82,9 @@ impl Overrides {
         }
         if let Some(m) = self.method {
             scene.radiosity.method = m;
+        }
+        if let Some(g) = self.final_gather {
+            scene.render.final_gather = g;
         }
         if let Some(c) = &self.camera {
             let cam = &mut scene.camera;

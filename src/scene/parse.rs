@@ -108,6 +108,9 @@ enum MemorySize {
 #[serde(deny_unknown_fields)]
 struct RawRender {
     direct: Option<DirectMode>,
+    final_gather: Option<FinalGatherMode>,
+    gather_rays: Option<S<i64>>,
+    cache_accuracy: Option<S<f32>>,
     light_samples: Option<S<i64>>,
     max_depth: Option<S<i64>>,
     min_throughput: Option<S<f32>>,
@@ -555,6 +558,13 @@ fn render_params(loc: &Locator, raw: Option<&RawRender>, base: RenderParams) -> 
     let Some(r) = raw else { return Ok(p) };
     if let Some(d) = r.direct {
         p.direct = d;
+    }
+    if let Some(g) = r.final_gather {
+        p.final_gather = g;
+    }
+    p.gather_rays = loc.positive_int(&r.gather_rays, "gather_rays", 16, 16384, p.gather_rays)?;
+    if let Some(a) = loc.ranged(&r.cache_accuracy, "cache_accuracy", |x| (0.0..=1.0).contains(&x), "in [0, 1]")? {
+        p.cache_accuracy = a;
     }
     p.light_samples = loc.positive_int(&r.light_samples, "light_samples", 1, 4096, p.light_samples)?;
     p.max_depth = loc.positive_int(&r.max_depth, "max_depth", 1, 256, p.max_depth)?;

@@ -11,8 +11,9 @@ use crate::radiosity::Solution;
 use crate::scene::DirectMode;
 use crate::transport::SurfaceHit;
 
-/// How the light a diffuse surface reflects is estimated. (A final gather, rays from the hit reading
-/// the solution where they land, would be a further estimator here.)
+/// How the light a diffuse surface reflects is estimated: where direct light comes from. The indirect
+/// light is the interpolated solution's, or a final gather's (`trace::gather`) when `radiance` is given
+/// one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DiffuseEstimator {
     /// L_d = B(p)/π: the Gouraud-interpolated radiosity holds all diffuse light, direct light
@@ -88,9 +89,9 @@ impl<'a> Diffuse<'a> {
 
     /// Diffuse radiance towards the eye at a hit on element `element` of reflectance ρ (the texel
     /// albedo ρ(x) on a textured surface), given its exitance B(p) (`radiosity_at`), the direct
-    /// irradiance E_direct from shadow rays (used by `PixelDirect` only), the caustic detail ΔB_c
-    /// (reflected caustic light at pixel minus element resolution, already × ρ) and whether the
-    /// surface is textured. Untextured:
+    /// irradiance E_direct from shadow rays (used by `PixelDirect` only) with the gathered indirect
+    /// irradiance H_g (`trace::gather`, if any), the caustic detail ΔB_c (reflected caustic light at
+    /// pixel minus element resolution, already × ρ) and whether the surface is textured. Untextured:
     ///
     /// Interpolated: L = max(B + ΔB_c, 0)/π;
     /// PixelDirect: L = (E + max(B − E − B_direct + ΔB_c, 0))/π + ρ/π·E_direct.
@@ -99,6 +100,11 @@ impl<'a> Diffuse<'a> {
     /// with the irradiance H(p) interpolated from `vertex_irradiance` (so neighbours' albedos do not
     /// leak in): L = (E + max(ρ(x)·H(p) + ΔB_c, 0))/π, and with per-pixel direct light
     /// L = (E + max(ρ(x)·(H − H_direct)(p) + ΔB_c, 0))/π + ρ(x)/π·E_direct.
+    ///
+    /// With a gather, H_g replaces the interpolated indirect irradiance (B − E − B_direct)/ρ̄ₑ, and ρ (the
+    /// texel albedo where textured) multiplies it directly:
+    /// Interpolated: L = (E + max(B_direct(p) + ρ·H_g + ΔB_c, 0))/π, where textured B_direct(p) is
+    /// ρ(x)·H_direct(p); PixelDirect: L = (E + max(ρ·H_g + ΔB_c, 0))/π + ρ/π·E_direct.
     #[allow(clippy::too_many_arguments)]
     pub fn radiance(
         &self,
@@ -107,25 +113,39 @@ impl<'a> Diffuse<'a> {
         exitance: Vec3,
         reflectance: Vec3,
         textured: bool,
-        direct_irradiance: Vec3,
+        (direct_irradiance, gathered): (Vec3, Option<Vec3>),
         caustic: Vec3,
     ) -> Vec3 {
         let textured = textured && !self.vertex_irradiance.is_empty();
+        let emission = self.mesh.elements.emission[element];
+        if let Some(indirect_irradiance) = gathered {
+            let indirect = reflectance * indirect_irradiance + caustic;
+            return match (self.estimator, textured) {
+                (DiffuseEstimator::Interpolated, false) => {
+                    let direct = hit.interpolate(&self.solution.vertex_direct_exitance);
+                    (emission + (direct + indirect).max(Vec3::ZERO)) / PI
+                }
+                (DiffuseEstimator::Interpolated, true) => {
+                    let direct = reflectance * hit.interpolate(&self.vertex_direct_irradiance);
+                    (emission + (direct + indirect).max(Vec3::ZERO)) / PI
+                }
+                (DiffuseEstimator::PixelDirect, _) => {
+                    (emission + indirect.max(Vec3::ZERO)) / PI + reflectance / PI * direct_irradiance
+                }
+            };
+        }
         match (self.estimator, textured) {
             (DiffuseEstimator::Interpolated, false) => (exitance + caustic).max(Vec3::ZERO) / PI,
             (DiffuseEstimator::Interpolated, true) => {
-                let emission = self.mesh.elements.emission[element];
                 let irradiance = hit.interpolate(&self.vertex_irradiance);
                 (emission + (reflectance * irradiance + caustic).max(Vec3::ZERO)) / PI
             }
             (DiffuseEstimator::PixelDirect, false) => {
-                let emission = self.mesh.elements.emission[element];
                 let direct = hit.interpolate(&self.solution.vertex_direct_exitance);
                 let indirect = (exitance - emission - direct + caustic).max(Vec3::ZERO);
                 (emission + indirect) / PI + reflectance / PI * direct_irradiance
             }
             (DiffuseEstimator::PixelDirect, true) => {
-                let emission = self.mesh.elements.emission[element];
                 let irradiance =
                     hit.interpolate(&self.vertex_irradiance) - hit.interpolate(&self.vertex_direct_irradiance);
                 let indirect = (reflectance * irradiance + caustic).max(Vec3::ZERO);

@@ -1,5 +1,6 @@
 //! Pass two: a Whitted ray tracer (Whitted 1980) whose diffuse term is the radiosity solution.
-//! `camera` makes primary rays, `diffuse` reads the solution back at a hit, `caustics` sharpens the
+//! `camera` makes primary rays, `diffuse` reads the solution back at a hit, `gather` gathers
+//! the indirect light from it at the points the camera sees (with an irradiance cache), `caustics` sharpens the
 //! light that reached diffuse surfaces through mirrors and glass, and `whitted` is the ray-stack tracer
 //! that the film calls once per sample. The specular rules live in `transport`, shared with pass one.
 
@@ -9,6 +10,7 @@ pub mod caustics;
 pub mod cut_outs;
 pub mod diffuse;
 pub mod direct_light;
+pub mod gather;
 pub mod parts;
 pub mod whitted;
 

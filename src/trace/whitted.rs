@@ -11,6 +11,7 @@ use super::caustics::CausticMap;
 use super::cut_outs::{self, MAX_CUTOUT_CROSSINGS};
 use super::diffuse::{Diffuse, DiffuseEstimator};
 use super::direct_light::{DirectEstimate, DirectLight};
+use super::gather::FinalGather;
 use super::parts::{RadianceParts, Record};
 use crate::accel::Accel;
 use crate::film::Sampler;
@@ -106,6 +107,8 @@ pub struct Tracer<'a> {
     scale: f32,
     /// Angle one pixel subtends at the camera (radians), for texture footprints (`with_pixel_angle`).
     pixel_angle_rad: f32,
+    /// The final gather that replaces the interpolated indirect light (`with_final_gather`).
+    gather: Option<FinalGather>,
 }
 
 impl<'a> Tracer<'a> {
@@ -156,6 +159,7 @@ impl<'a> Tracer<'a> {
             caustics: None,
             scale,
             pixel_angle_rad: 0.0,
+            gather: None,
         })
     }
 
@@ -201,10 +205,37 @@ impl<'a> Tracer<'a> {
         Some(maps.emission_at(hit.uv, footprint_uv))
     }
 
+    /// Takes the diffuse term's indirect light from `gather` in `TraceMode::Final` (see
+    /// `Diffuse::radiance`).
+    pub fn with_final_gather(mut self, gather: FinalGather) -> Self {
+        self.gather = Some(gather);
+        self
+    }
+
+    pub fn mesh(&self) -> &Mesh {
+        self.mesh
+    }
+
+    pub fn materials(&self) -> &[Material] {
+        self.materials
+    }
+
+    pub fn diffuse(&self) -> &Diffuse<'a> {
+        &self.diffuse
+    }
+
+    pub fn surfaces(&self) -> Option<&[Surface]> {
+        self.surfaces
+    }
+
+    pub fn min_throughput(&self) -> f32 {
+        self.params.min_throughput
+    }
+
     /// The closest hit along a ray that is not cut out: surfaces whose opacity map reads below ½ at
     /// the hit are passed through (at most `MAX_CUTOUT_CROSSINGS` of them). Returns the hit and the
     /// distance from `origin`.
-    fn closest_opaque_hit(&self, origin: Vec3, dir: Vec3) -> Option<(SurfaceHit, f32)> {
+    pub fn closest_opaque_hit(&self, origin: Vec3, dir: Vec3) -> Option<(SurfaceHit, f32)> {
         let mesh = self.mesh;
         let mut from = origin;
         let mut travelled = 0.0f32;
@@ -361,13 +392,17 @@ impl<'a> Tracer<'a> {
                     }
                     _ => Vec3::ZERO,
                 };
+                let gathered = match &self.gather {
+                    Some(g) if reflectance.max_element() > 0.0 => Some(g.irradiance(self, p, facing, sampler, counts)),
+                    _ => None,
+                };
                 let diffuse = self.diffuse.radiance(
                     &hit,
                     element,
                     exitance,
                     reflectance,
                     texel_albedo.is_some(),
-                    light.irradiance,
+                    (light.irradiance, gathered),
                     caustic,
                 );
                 radiance += ray.throughput * (diffuse + emission_swap);

@@ -1,0 +1,88 @@
+//! The rays of one final gather: a stratified cosine-weighted hemisphere at a diffuse point, each ray
+//! reading the radiosity solution where it lands (less the emission, which the direct term holds), with
+//! mirrors and glass on the way followed by the Whitted rules to a bounded depth.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+
+use super::hemisphere::{estimate, frame, HemisphereEstimate, Strata};
+use crate::film::Sampler;
+use crate::trace::whitted::{RayCounts, Tracer};
+use crate::transport::ray_stack::RayStack;
+use crate::transport::scatter::scatter;
+
+/// Specular bounces a gather ray follows (mirror, glass) before it stops.
+pub const GATHER_SPECULAR_DEPTH: u32 = 4;
+const GATHER_STACK: usize = GATHER_SPECULAR_DEPTH as usize + 2;
+
+impl Tracer<'_> {
+    /// The gather at point `p` with unit normal `n` (the side being shaded) over `strata`, one jittered
+    /// ray per cell (`gather_radiance`), and its irradiance, harmonic mean distance and gradients
+    /// (`hemisphere::estimate`). The irradiance is the indirect part: light from the emitters along
+    /// straight lines is left out; what arrives through mirrors and glass is in.
+    pub fn gather(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        strata: Strata,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> HemisphereEstimate {
+        let (t, b) = frame(n);
+        let origin = p + n * self.ray_offset();
+        let mut radiance = Vec::with_capacity(strata.cells());
+        let mut distance = Vec::with_capacity(strata.cells());
+        for j in 0..strata.rings {
+            for k in 0..strata.sectors {
+                let local = strata.direction(j, k, sampler.next_1d(), sampler.next_1d());
+                let dir = (t * local.x + b * local.y + n * local.z).normalize();
+                let (l, r) = self.gather_radiance(origin, dir, counts);
+                radiance.push(l);
+                distance.push(r);
+            }
+        }
+        estimate(strata, &radiance, &distance, n)
+    }
+
+    /// Radiance arriving at `origin` from `dir` as the gather counts it, and the distance to the first
+    /// surface (infinite if none): at a diffuse hit x on element e, (B(x) − E_e)/π, with B the
+    /// interpolated exitance (`Diffuse::radiosity_at`); the emission E_e counts only after a specular
+    /// bounce (shadow rays and pass one's direct part see straight paths only). Mirrors and glass add
+    /// their branches (`transport::scatter`) up to `GATHER_SPECULAR_DEPTH` bounces.
+    pub fn gather_radiance(&self, origin: Vec3, dir: Vec3, counts: &mut RayCounts) -> (Vec3, f32) {
+        let mut stack = RayStack::<GATHER_STACK>::new(origin, dir);
+        let mut radiance = Vec3::ZERO;
+        let mut first_distance = f32::INFINITY;
+        let elements = &self.mesh().elements;
+        while let Some(ray) = stack.pop() {
+            counts.secondary += 1;
+            let Some((hit, distance)) = self.closest_opaque_hit(ray.origin, ray.dir) else {
+                continue;
+            };
+            if ray.depth == 0 {
+                first_distance = distance;
+            }
+            let material = &self.materials()[hit.material as usize];
+            if let Some(element) = hit.element.map(|e| e as usize) {
+                let exitance = self.diffuse().radiosity_at(&hit);
+                let emission = if ray.depth == 0 { elements.emission[element] } else { Vec3::ZERO };
+                radiance += ray.throughput * (exitance - emission).max(Vec3::ZERO) / PI;
+            } else if !material.is_dielectric() {
+                continue;
+            }
+            if ray.depth >= GATHER_SPECULAR_DEPTH || !material.is_specular() {
+                continue;
+            }
+            let hit = hit.with_shading_normal(self.mesh(), self.surfaces(), ray.dir);
+            stack.push_branches(
+                &ray,
+                &scatter(material, ray.dir, &hit),
+                &hit,
+                self.ray_offset(),
+                self.min_throughput(),
+            );
+        }
+        (radiance, first_distance)
+    }
+}

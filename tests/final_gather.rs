@@ -1,0 +1,305 @@
+//! The final gather and its irradiance cache, as specifications: exact where the answer is known
+//! (a furnace, a point under a bright ceiling), better than the interpolated solution where the
+//! elements are too coarse (a closed box's concave edges), the cache within Ward's error bound of
+//! gathering everywhere, and the same bytes at any thread count.
+
+mod common;
+
+use std::f32::consts::PI;
+
+use common::{emitter, scene, solution, surface};
+use glam::{vec3, Vec3};
+use radray::accel::Accel;
+use radray::film::Sampler;
+use radray::mesh::Mesh;
+use radray::progress::Progress;
+use radray::radiosity::Solution;
+use radray::run::{self, RunStats};
+use radray::scene::{Camera, DirectMode, FinalGatherMode, Material, RenderParams, SceneDescription, Surface};
+use radray::trace::camera::PinholeCamera;
+use radray::trace::gather::{fill, Strata};
+use radray::trace::{RayCounts, TraceMode, Tracer};
+use radray::transport::photons::RunPhotons;
+
+/// The square of side 2·`half` centred on `centre` spanned by unit axes u, v, facing u × v.
+fn square(centre: Vec3, u: Vec3, v: Vec3, half: f32, material: u32) -> Surface {
+    let (u, v) = (u * half, v * half);
+    surface([centre - u - v, centre + u - v, centre + u + v, centre - u + v], material, false)
+}
+
+/// The unit cube [0, 1]³ seen from inside: six faces facing in, of material `wall` (the ceiling y = 1
+/// of material `ceiling`).
+fn cube_faces(wall: u32, ceiling: u32) -> Vec<Surface> {
+    let h = Vec3::splat(0.5);
+    vec![
+        square(vec3(0.5, 0.0, 0.5), Vec3::Z, Vec3::X, 0.5, wall), // floor, facing +y
+        square(vec3(0.5, 1.0, 0.5), Vec3::X, Vec3::Z, 0.5, ceiling), // ceiling, facing −y
+        square(vec3(0.0, 0.5, 0.5), Vec3::Y, Vec3::Z, 0.5, wall), // x = 0, facing +x
+        square(vec3(1.0, 0.5, 0.5), Vec3::Z, Vec3::Y, 0.5, wall), // x = 1, facing −x
+        square(vec3(0.5, 0.5, 0.0), Vec3::X, Vec3::Y, 0.5, wall), // z = 0, facing +z
+        square(h + vec3(0.0, 0.0, 0.5), Vec3::Y, Vec3::X, 0.5, wall), // z = 1, facing −z
+    ]
+}
+
+struct Setup {
+    mesh: Mesh,
+    accel: Accel,
+    solution: Solution,
+    materials: Vec<Material>,
+}
+
+impl Setup {
+    /// A hand-made solution on `scene` meshed at `max_edge`.
+    fn hand_made(scene: &SceneDescription, max_edge: f32, exitance: impl Fn(&Mesh) -> (Vec<Vec3>, Vec<Vec3>)) -> Setup {
+        let mesh = Mesh::build(scene, max_edge);
+        let accel = Accel::build(&mesh.positions, &mesh.triangles);
+        let (b, direct) = exitance(&mesh);
+        let solution = solution(&mesh, b, direct);
+        Setup { mesh, accel, solution, materials: scene.materials.clone() }
+    }
+
+    /// Pass one as `radray render` runs it.
+    fn solved(scene: &SceneDescription) -> Setup {
+        let mut stats = RunStats::default();
+        let (mesh, solution) =
+            run::pass_one(scene, None, &RunPhotons::default(), &Progress::hidden(), &mut stats).unwrap();
+        let accel = Accel::build(&mesh.positions, &mesh.triangles);
+        Setup { mesh, accel, solution: (*solution).clone(), materials: scene.materials.clone() }
+    }
+
+    fn tracer(&self) -> Tracer<'_> {
+        Tracer::new(&self.mesh, &self.accel, &self.solution, &self.materials, &RenderParams::default()).unwrap()
+    }
+}
+
+/// The gathered indirect irradiance at (p, n) with about `rays` rays, from stream `seed`.
+fn gathered(tracer: &Tracer, p: Vec3, n: Vec3, rays: u32, seed: u64) -> Vec3 {
+    let mut sampler = Sampler::independent(seed, 0);
+    tracer.gather(p, n, Strata::for_rays(rays), &mut sampler, &mut RayCounts::default()).irradiance
+}
+
+#[test]
+fn gather_in_a_furnace_reads_the_analytic_indirect_irradiance() {
+    // Every face emits E and reflects ρ: B = E/(1 − ρ) everywhere, its direct part ρE, and the
+    // indirect irradiance at any point ∫(B − E)/π cos θ dω = B − E = ρE/(1 − ρ). The field is
+    // constant, so every cell reads the same value: only f32 rounding of ~1000 terms remains.
+    let rho = 0.5;
+    let materials = vec![Material { emitted_radiance: Vec3::ONE, ..Material::diffuse("furnace", Vec3::splat(rho)) }];
+    let setup = Setup::hand_made(&scene(materials, cube_faces(0, 0)), 0.25, |mesh| {
+        let e = &mesh.elements.emission;
+        (e.iter().map(|&e| e / (1.0 - rho)).collect(), e.iter().map(|&e| e * rho).collect())
+    });
+    let emission = setup.mesh.elements.emission[0];
+    let expected = emission * rho / (1.0 - rho);
+    let tracer = setup.tracer();
+    for (i, (p, n)) in [(vec3(0.3, 0.0, 0.7), Vec3::Y), (vec3(0.0, 0.9, 0.1), Vec3::X), (vec3(0.5, 1.0, 0.5), -Vec3::Y)]
+        .into_iter()
+        .enumerate()
+    {
+        let h = gathered(&tracer, p, n, 1024, i as u64);
+        assert!((h - expected).abs().max_element() <= 1e-4 * expected.max_element(), "{h} against {expected}");
+    }
+}
+
+#[test]
+fn furnace_is_two_everywhere_with_the_final_gather() {
+    // The shipped furnace through the whole pipeline with the gather on and direct light from the
+    // solution (no shadow-ray noise): L = Ke/(1 − Kd) = 2. 1 %: the hemicube's row sums are within
+    // ~1e-3 of one, amplified by 1/(1 − ρ) = 2 (as tests/accuracy.rs's furnace bound).
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let progress = Progress::hidden();
+    let mut scene =
+        run::load_scene(&root.join("scenes/furnace.toml"), &radray::scene::Overrides::default(), &progress).unwrap();
+    (scene.image.width_px, scene.image.height_px) = (32, 32);
+    scene.render.final_gather = FinalGatherMode::On;
+    scene.render.direct = DirectMode::Radiosity;
+    let mut stats = RunStats::default();
+    let photons = RunPhotons::default();
+    let (mesh, solution) = run::pass_one(&scene, None, &photons, &progress, &mut stats).unwrap();
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let image =
+        run::render(&scene, &mesh, &accel, &solution, TraceMode::Final, &photons, &progress, &mut stats).unwrap();
+    for p in &image.pixels {
+        for c in p.to_array() {
+            assert!((c - 2.0).abs() <= 0.02, "pixel {c}");
+        }
+    }
+}
+
+/// Form factor from a point to a parallel rectangle a × b at height c above one of its corners:
+/// F = 1/(2π) [X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))], X = a/c, Y = b/c.
+fn corner_form_factor(a: f32, b: f32, c: f32) -> f32 {
+    let (x, y) = (a / c, b / c);
+    let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+    (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
+}
+
+#[test]
+fn gather_converges_to_a_bright_ceilings_form_factor() {
+    // Only the ceiling of the unit cube is bright (B = 1, no emission): the irradiance at the floor's
+    // centre is B·F, F four corner form factors of 0.5 × 0.5 at height 1. Jittered strata err only in
+    // the cells the ceiling's border crosses, at most 2(M + N) of them (each ring and each sector
+    // boundary is crossed at most twice by a convex outline), each off by at most π/(MN)·B/π·π, with
+    // variance ≤ a quarter of its square: σ ≤ π/(MN)·B·√(2(M + N))/2. Over K seeds the mean is within
+    // 4σ/√K.
+    let materials = vec![Material::diffuse("wall", Vec3::splat(0.5)), Material::diffuse("ceiling", Vec3::splat(0.5))];
+    let setup = Setup::hand_made(&scene(materials, cube_faces(0, 1)), 0.1, |mesh| {
+        let b = (0..mesh.elements.len())
+            .map(|e| if mesh.elements.material[e] == 1 { Vec3::ONE } else { Vec3::ZERO })
+            .collect::<Vec<_>>();
+        (b, vec![Vec3::ZERO; mesh.elements.len()])
+    });
+    let tracer = setup.tracer();
+    let exact = 4.0 * corner_form_factor(0.5, 0.5, 1.0);
+    let seeds = 8;
+    for rays in [64, 256, 1024, 4096] {
+        let strata = Strata::for_rays(rays);
+        let (m, n) = (strata.rings as f32, strata.sectors as f32);
+        let sigma = PI / (m * n) * (2.0 * (m + n)).sqrt() / 2.0;
+        let mean =
+            (0..seeds).map(|s| gathered(&tracer, vec3(0.5, 0.0, 0.5), Vec3::Y, rays, s).x).sum::<f32>() / seeds as f32;
+        let bound = 4.0 * sigma / (seeds as f32).sqrt();
+        assert!((mean - exact).abs() <= bound, "{rays} rays: {mean} against {exact} (bound {bound})");
+    }
+}
+
+/// A closed unit cube (walls Kd 0.7) lit by a 0.3 m square emitter just under the ceiling's centre,
+/// meshed at `max_edge`.
+fn lit_box(max_edge: f32) -> SceneDescription {
+    let materials = vec![Material::diffuse("wall", Vec3::splat(0.7)), emitter("lamp", Vec3::splat(10.0))];
+    let mut surfaces = cube_faces(0, 0);
+    surfaces.push(square(vec3(0.5, 0.999, 0.5), Vec3::X, Vec3::Z, 0.15, 1));
+    let mut s = scene(materials, surfaces);
+    s.radiosity.max_element_edge = max_edge;
+    s.radiosity.hemicube_resolution_px = 64;
+    s.camera = Camera { eye: vec3(0.5, 0.5, 0.95), look_at: vec3(0.5, 0.3, 0.0), up: Vec3::Y, vfov_deg: 90.0 };
+    s
+}
+
+/// Points near the box's concave edges and corners (2 cm from the walls), where the indirect light
+/// changes within an element, with their normals.
+fn near_edges() -> Vec<(Vec3, Vec3)> {
+    let mut points = Vec::new();
+    for t in [0.1f32, 0.3, 0.5, 0.7, 0.9] {
+        points.push((vec3(t, 0.0, 0.02), Vec3::Y));
+        points.push((vec3(0.02, 0.0, t), Vec3::Y));
+        points.push((vec3(0.0, t, 0.02), Vec3::X));
+        points.push((vec3(0.98, 1.0, t), -Vec3::Y));
+    }
+    points
+}
+
+/// The interpolated indirect irradiance of `setup`'s solution at (p, n): (B − E − B_direct)(p)/ρ.
+fn interpolated_indirect(setup: &Setup, p: Vec3, n: Vec3) -> f32 {
+    // Slightly oblique: an axis-aligned ray starting on a node's flat bound can slip past it.
+    let dir = (-n + Vec3::splat(1e-3)).normalize();
+    let hit = setup.accel.closest_hit(p - dir * 1e-2, dir, 0.0, 1.0).unwrap_or_else(|| panic!("{p} lies on no wall"));
+    let hit = radray::transport::SurfaceHit::new(&setup.mesh, &hit, dir);
+    let element = hit.element.unwrap() as usize;
+    let b = hit.interpolate(&setup.solution.vertex_exitance)
+        - setup.mesh.elements.emission[element]
+        - hit.interpolate(&setup.solution.vertex_direct_exitance);
+    b.x / setup.mesh.elements.reflectance[element].x
+}
+
+#[test]
+fn final_gather_removes_the_element_bias_at_concave_edges() {
+    // Reference: a 4096-ray gather over a fine solution (10 cm elements), one bounce away from its
+    // elements. Against it, the coarse solution (34 cm, three elements across a wall) read by
+    // interpolation, and gathered with 256 rays. The gather's own noise σ is measured from two seeds
+    // (rms difference/√2); its error must stay below the interpolation's by more than 2σ.
+    let fine = Setup::solved(&lit_box(0.1));
+    let coarse = Setup::solved(&lit_box(0.34));
+    let (fine_tracer, coarse_tracer) = (fine.tracer(), coarse.tracer());
+    let points = near_edges();
+    let mut err = [0.0f32; 3];
+    let mut noise = 0.0f32;
+    for (i, &(p, n)) in points.iter().enumerate() {
+        let reference = gathered(&fine_tracer, p, n, 4096, 1000 + i as u64).x;
+        let g0 = gathered(&coarse_tracer, p, n, 256, i as u64).x;
+        let g1 = gathered(&coarse_tracer, p, n, 256, 5000 + i as u64).x;
+        let interpolated = interpolated_indirect(&coarse, p, n);
+        err[0] += ((interpolated - reference) / reference).powi(2);
+        err[1] += ((g0 - reference) / reference).powi(2);
+        noise += ((g0 - g1) / reference).powi(2) / 2.0;
+    }
+    let k = points.len() as f32;
+    let (interp_rms, gather_rms, sigma) = ((err[0] / k).sqrt(), (err[1] / k).sqrt(), (noise / k).sqrt());
+    assert!(
+        gather_rms + 2.0 * sigma < interp_rms,
+        "relative rms error: gather {gather_rms} (noise {sigma}), interpolated {interp_rms}"
+    );
+}
+
+/// Renders `scene` (final mode, small) with the gather on in a pool of `threads` threads.
+fn render_with_threads(setup: &Setup, scene: &SceneDescription, threads: usize) -> Vec<Vec3> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| {
+        let mut stats = RunStats::default();
+        run::render(
+            scene,
+            &setup.mesh,
+            &setup.accel,
+            &setup.solution,
+            TraceMode::Final,
+            &RunPhotons::default(),
+            &Progress::hidden(),
+            &mut stats,
+        )
+        .unwrap()
+        .pixels
+    })
+}
+
+#[test]
+fn the_gathered_image_is_the_same_at_any_thread_count() {
+    let mut scene = lit_box(0.34);
+    (scene.image.width_px, scene.image.height_px, scene.image.samples_per_pixel) = (40, 30, 2);
+    scene.render.final_gather = FinalGatherMode::On;
+    scene.render.gather_rays = 64;
+    let setup = Setup::solved(&scene);
+    let one = render_with_threads(&setup, &scene, 1);
+    let two = render_with_threads(&setup, &scene, 2);
+    let three = render_with_threads(&setup, &scene, 3);
+    let bits = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    assert_eq!(bits(&one), bits(&two));
+    assert_eq!(bits(&one), bits(&three));
+}
+
+#[test]
+fn the_cache_interpolates_within_its_error_bound() {
+    // Ward's weight w_i = 1/(|p − p_i|/R_i + √(1 − n·n_i)) is the inverse of the split-sphere model's
+    // relative error for using record i at p; a record serves where 1/w_i < a. So a cached value is
+    // within a of the true irradiance, plus the records' own sampling noise (σ, measured from two
+    // seeds of 256-ray gathers as above, 4σ allowed). Checked at the pixel centres of a view where a
+    // record serves, against 4096-ray gathers.
+    let scene = lit_box(0.34);
+    let setup = Setup::solved(&scene);
+    let tracer = setup.tracer();
+    let (w, h) = (32, 24);
+    let camera = PinholeCamera::new(&scene.camera, w, h);
+    let angle = scene.camera.vfov_deg.to_radians() / h as f32;
+    let accuracy = 0.15;
+    let (cache, _) = fill(&tracer, &camera, w, h, angle, Strata::for_rays(256), accuracy, 3);
+    let mut checked = 0;
+    let mut noise = 0.0f32;
+    let mut errors = Vec::new();
+    for y in (0..h).step_by(3) {
+        for x in (0..w).step_by(3) {
+            let ray = camera.ray(x as f32 + 0.25, y as f32 + 0.75);
+            let Some((hit, _)) = tracer.closest_opaque_hit(ray.origin, ray.dir) else { continue };
+            let (p, n) = (hit.position, hit.geometric_normal);
+            let Some(cached) = cache.lookup(p, n) else { continue };
+            let reference = gathered(&tracer, p, n, 4096, 77 + checked).x;
+            let g0 = gathered(&tracer, p, n, 256, 900 + checked).x;
+            let g1 = gathered(&tracer, p, n, 256, 1900 + checked).x;
+            noise += ((g0 - g1) / reference).powi(2) / 2.0;
+            errors.push((cached.x - reference).abs() / reference);
+            checked += 1;
+        }
+    }
+    assert!(checked >= 40, "only {checked} points were served by the cache");
+    let sigma = (noise / checked as f32).sqrt();
+    let worst = errors.iter().copied().fold(0.0, f32::max);
+    assert!(worst <= accuracy + 4.0 * sigma, "worst relative error {worst}, bound {accuracy} + 4·{sigma}");
+}
