@@ -116,7 +116,7 @@ fn report_shows_every_job_with_images_that_exist_and_fetches_nothing() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let jobs = [
-        job(&s, "a.png", "reference = \"reference.exr\""),
+        job(&s, "a.png", "reference = \"reference.exr\"\ndirect = \"radiosity\""),
         job(&s, "b.exr", "mode = \"radiosity\"\ndirect = \"pixel\"\nmaterials = { light = { ke = [4.0, 8.0, 20.0] } }"),
         job("no<such>&scene.toml", "c.png", ""),
     ]
