@@ -272,7 +272,9 @@ pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh,
     for w in &warnings {
         progress.note(&format!("warning: {w}"));
     }
-    let mesh = Mesh::build_with_textures(scene, edge, Arc::new(textures));
+    let mut mesh = Mesh::build_with_textures(scene, edge, Arc::new(textures));
+    // Elements buried under the backs of one-sided surfaces stay out of the vertex averages.
+    mesh.element_buried = crate::burial::buried_elements(&mesh);
     stage.finish(&format!(
         "{} surfaces → {} elements, {} triangles",
         scene.surfaces.len(),
