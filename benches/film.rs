@@ -26,6 +26,7 @@ fn film_overhead(c: &mut Criterion) {
             adaptive_threshold: None,
             adaptive_max_samples: 16,
             seed: 1,
+            exposure: Default::default(),
         };
         group.bench_function(name, |b| {
             b.iter(|| film::render(black_box(&settings), |x, y, _| Vec3::new(x, y, 1.0), &|| {}))

@@ -731,6 +731,19 @@ def update_readme(cells: dict[str, str]) -> None:
 # ----------------------------------------------------------------------------------------------------
 
 
+KEPT_MARKER = "<!-- Hand-written below: docs/make_report.py keeps everything after this line. -->"
+
+
+def kept_sections(path: Path) -> str:
+    """The hand-written tail of a generated page (measurements recorded by people, not by this script):
+    everything from KEPT_MARKER on, so that regenerating the page does not drop it."""
+    if not path.exists():
+        return ""
+    text = path.read_text()
+    at = text.find(KEPT_MARKER)
+    return "\n" + text[at:] if at >= 0 else ""
+
+
 def main() -> None:
     started = time.time()
     load_before = load_average()
@@ -812,7 +825,7 @@ Whole-process figures of the final image (`--direct pixel`) from the time-to-err
 {bench_text}
 """
     (DOCS / "accuracy.md").write_text(accuracy)
-    (DOCS / "performance.md").write_text(performance)
+    (DOCS / "performance.md").write_text(performance + kept_sections(DOCS / "performance.md"))
     if ARGS.readme:
         update_readme(cells)
     log(f"wrote docs/accuracy.md, docs/performance.md, docs/images/report_*.png in {time.time() - started:.0f} s")

@@ -4,7 +4,7 @@
 //! reflectance re-solve from them) and shares identical solutions. `--shard K/N` runs every N-th job
 //! from K, so a cluster's job array can split a batch with no extra software.
 
-use crate::output::ToneCurve;
+use crate::output::{Exposure, ToneCurve};
 use crate::progress::Progress;
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, RunStats, Runner, Work};
 use crate::scene::overrides::{CameraOverride, MaterialOverride};
@@ -53,7 +53,7 @@ struct JobEntry {
     seed: Option<u64>,
     direct: Option<DirectMode>,
     quality: Option<Quality>,
-    exposure: Option<f32>,
+    exposure: Option<Exposure>,
     tone: Option<ToneCurve>,
     camera: Option<CameraOverride>,
     /// Per material name: new `kd`, `ke` or `ks` (re-solves from cached form factors).
@@ -184,6 +184,6 @@ fn job_of(entry: &JobEntry, base: &Path) -> Result<Job, Failure> {
         camera: entry.camera.clone(),
         materials,
     };
-    let png = PngSettings { exposure_stops: entry.exposure.unwrap_or(0.0), tone: entry.tone.unwrap_or_default() };
+    let png = PngSettings { exposure: entry.exposure, tone: entry.tone.unwrap_or_default() };
     Ok(Job { scene: base.join(&entry.scene), overrides, work: Work::Render { plan, png, solution: None } })
 }

@@ -90,9 +90,10 @@ pub struct OverrideArgs {
     /// A named preset of element size, hemicube resolution, samples and light samples.
     #[arg(long, value_enum)]
     pub quality: Option<QualityArg>,
-    /// PNG exposure in stops (radiance × 2^stops before encoding).
+    /// PNG exposure in stops (radiance × 2^stops before encoding), or "auto" (log-average
+    /// luminance brought to 0.18).
     #[arg(long, allow_negative_numbers = true)]
-    pub exposure: Option<f32>,
+    pub exposure: Option<Exposure>,
     /// PNG tone curve applied after the exposure.
     #[arg(long, value_enum)]
     pub tone: Option<ToneCurve>,
@@ -179,7 +180,7 @@ pub struct InfoArgs {
 
 use crate::batch;
 use crate::compare;
-use crate::output::{self, ToneCurve};
+use crate::output::{self, Exposure, ToneCurve};
 use crate::progress::{Progress, Verbosity};
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
 use crate::scene::{DirectMode, Overrides, Quality};
@@ -219,7 +220,7 @@ impl OverrideArgs {
 
     /// How PNGs are encoded.
     pub fn png(&self) -> PngSettings {
-        PngSettings { exposure_stops: self.exposure.unwrap_or(0.0), tone: self.tone.unwrap_or_default() }
+        PngSettings { exposure: self.exposure, tone: self.tone.unwrap_or_default() }
     }
 }
 

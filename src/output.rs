@@ -61,6 +61,109 @@ pub enum ToneCurve {
     Aces,
 }
 
+/// The exposure of a PNG: a fixed number of stops (radiance × 2^stops), or chosen from the image.
+/// In TOML and job files: a number, or the string "auto".
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Exposure {
+    Stops(f32),
+    /// [`auto_exposure_stops`] of the image being written.
+    Auto,
+}
+
+impl<'de> serde::Deserialize<'de> for Exposure {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Exposure, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Exposure;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number of stops or \"auto\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Exposure, E> {
+                Exposure::Stops(v as f32).checked().map_err(E::custom)
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Exposure, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Exposure, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Exposure, E> {
+                v.parse().map_err(E::custom)
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
+}
+
+impl Default for Exposure {
+    fn default() -> Exposure {
+        Exposure::Stops(0.0)
+    }
+}
+
+/// Largest exposure magnitude accepted, in stops (2^±64 covers any f32 radiance worth showing).
+pub const MAX_EXPOSURE_STOPS: f32 = 64.0;
+
+impl std::str::FromStr for Exposure {
+    type Err = String;
+
+    /// `auto` or a finite number of stops within ±[`MAX_EXPOSURE_STOPS`].
+    fn from_str(text: &str) -> Result<Exposure, String> {
+        if text.trim().eq_ignore_ascii_case("auto") {
+            return Ok(Exposure::Auto);
+        }
+        let stops: f32 =
+            text.trim().parse().map_err(|_| format!("exposure {text:?} is neither a number of stops nor \"auto\""))?;
+        Exposure::Stops(stops).checked()
+    }
+}
+
+impl Exposure {
+    /// The exposure itself when its stops are finite and within ±[`MAX_EXPOSURE_STOPS`].
+    pub fn checked(self) -> Result<Exposure, String> {
+        match self {
+            Exposure::Stops(s) if !(s.is_finite() && s.abs() <= MAX_EXPOSURE_STOPS) => {
+                Err(format!("exposure {s} stops must be finite and within ±{MAX_EXPOSURE_STOPS}"))
+            }
+            e => Ok(e),
+        }
+    }
+
+    /// The stops to apply to `image`.
+    pub fn stops_for(self, image: &Image) -> f32 {
+        match self {
+            Exposure::Stops(s) => s,
+            Exposure::Auto => auto_exposure_stops(image),
+        }
+    }
+}
+
+/// The key of [`auto_exposure_stops`]: the exposed log-average luminance (Reinhard et al. 2002's
+/// middle grey).
+pub const AUTO_EXPOSURE_KEY: f32 = 0.18;
+
+/// Automatic exposure from the log-average luminance (Reinhard, Stark, Shirley and Ferwerda 2002):
+/// L̄ = exp((1/N) Σ ln Y_i) over the N pixels of finite, positive luminance Y (Rec. 709 weights),
+/// and stops = log₂(key / L̄), key = [`AUTO_EXPOSURE_KEY`], so the exposed log-average is 0.18.
+/// Black pixels (rays that left the scene) are left out rather than given Reinhard's small δ, which
+/// would let an open background decide the exposure. 0 stops for an image with no such pixel; the
+/// result is clamped to ±[`MAX_EXPOSURE_STOPS`].
+pub fn auto_exposure_stops(image: &Image) -> f32 {
+    let (mut sum, mut n) = (0.0f64, 0u64);
+    for p in &image.pixels {
+        let y = crate::film::luminance(*p);
+        if y.is_finite() && y > 0.0 {
+            sum += (y as f64).ln();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return 0.0;
+    }
+    let log_average = (sum / n as f64).exp();
+    ((AUTO_EXPOSURE_KEY as f64 / log_average).log2() as f32).clamp(-MAX_EXPOSURE_STOPS, MAX_EXPOSURE_STOPS)
+}
+
 /// Image file formats radray writes and reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
@@ -304,5 +407,28 @@ mod tests {
             }
         }
         assert_eq!(tone_curve(1.0, ToneCurve::Reinhard), 0.5);
+    }
+
+    #[test]
+    fn auto_exposure_brings_the_log_average_to_middle_grey() {
+        // Grey pixels of radiance 0.5 and 2 (log-average 1) and two black ones, which are left out:
+        // stops = log2(0.18 / 1).
+        let mut image = Image::new(2, 2);
+        image.pixels = vec![Vec3::splat(0.5), Vec3::splat(2.0), Vec3::ZERO, Vec3::ZERO];
+        let stops = auto_exposure_stops(&image);
+        assert!((stops - 0.18f32.log2()).abs() < 1e-5, "{stops}");
+        // Scaling the image by 2^k moves the exposure by −k stops: the exposed image is the same.
+        image.pixels.iter_mut().for_each(|p| *p *= 8.0);
+        assert!((auto_exposure_stops(&image) - (0.18f32.log2() - 3.0)).abs() < 1e-5);
+        assert_eq!(auto_exposure_stops(&Image::new(3, 1)), 0.0);
+    }
+
+    #[test]
+    fn exposure_reads_stops_or_auto_and_refuses_the_rest() {
+        assert_eq!("auto".parse::<Exposure>(), Ok(Exposure::Auto));
+        assert_eq!("-1.5".parse::<Exposure>(), Ok(Exposure::Stops(-1.5)));
+        assert!("bright".parse::<Exposure>().is_err());
+        assert!("inf".parse::<Exposure>().is_err());
+        assert!("100".parse::<Exposure>().is_err());
     }
 }

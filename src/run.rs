@@ -15,8 +15,8 @@ use crate::compare::CompareError;
 use crate::film::{self, Image};
 use crate::material::SceneTextures;
 use crate::mesh::{self, Mesh};
-use crate::output::{self, OutputError, ToneCurve};
-use crate::progress::Progress;
+use crate::output::{self, Exposure, OutputError, ToneCurve};
+use crate::progress::{Progress, Verbosity};
 use crate::radiosity::method::{self, MethodError, Reuse};
 use crate::radiosity::solution_file::SolutionFileError;
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
@@ -113,10 +113,11 @@ pub enum Mode {
     Both,
 }
 
-/// How a PNG is encoded from radiance: exposure in stops, then the tone curve.
+/// How a PNG is encoded from radiance: exposure (stops, or automatic), then the tone curve.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PngSettings {
-    pub exposure_stops: f32,
+    /// Overrides the scene's `[image] exposure` when set.
+    pub exposure: Option<Exposure>,
     pub tone: ToneCurve,
 }
 
@@ -322,13 +323,32 @@ pub fn output_plan(outputs: &[PathBuf], mode: Mode) -> Result<Vec<(TraceMode, Pa
     Ok(plan)
 }
 
-/// Writes an image as PNG or EXR by its extension.
+/// Writes an image as PNG or EXR by its extension; a PNG takes `png`'s exposure, or 0 stops.
 pub fn write_image(image: &Image, path: &Path, png: &PngSettings) -> Result<(), Failure> {
+    write_image_exposed(image, path, png, Exposure::default(), &Progress::hidden())
+}
+
+/// Writes an image as PNG or EXR by its extension. A PNG takes `png`'s exposure, else the scene's
+/// `fallback`; with `-v` the stops chosen are reported (automatic exposure is measured on `image`).
+/// EXR stays linear radiance.
+pub fn write_image_exposed(
+    image: &Image,
+    path: &Path,
+    png: &PngSettings,
+    fallback: Exposure,
+    progress: &Progress,
+) -> Result<(), Failure> {
     let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     if is_exr {
         output::write_exr(image, path)?;
     } else {
-        output::write_png(image, path, png.exposure_stops, png.tone)?;
+        let exposure = png.exposure.unwrap_or(fallback);
+        let stops = exposure.stops_for(image);
+        if progress.verbosity() == Verbosity::Verbose {
+            let how = if exposure == Exposure::Auto { "auto, log-average key 0.18" } else { "fixed" };
+            progress.note(&format!("{}: exposure {stops:+.3} stops ({how})", path.display()));
+        }
+        output::write_png(image, path, stops, png.tone)?;
     }
     Ok(())
 }
@@ -361,7 +381,7 @@ pub fn render_plan(
             .find(|(m, _)| m == mode)
             .map(|(_, i)| i)
             .ok_or_else(|| Failure::internal(anyhow::anyhow!("image missing")))?;
-        write_image(image, path, png)?;
+        write_image_exposed(image, path, png, scene.image.exposure, progress)?;
         written.push(path.clone());
     }
     Ok(written)

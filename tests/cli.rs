@@ -287,3 +287,46 @@ fn thread_count_does_not_change_a_single_byte() {
     }
     assert!(outputs[0] == outputs[1], "1 and 2 threads gave different images");
 }
+
+#[test]
+fn auto_exposure_is_printed_with_verbose_and_leaves_exr_linear() {
+    let cornell_box = scene("cornell_box.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let (png, exr) = (dir.path().join("auto.png"), dir.path().join("auto.exr"));
+    let mut args = vec!["-v", "render", &cornell_box[..], "-o", png.to_str().unwrap(), "-o", exr.to_str().unwrap()];
+    args.extend(SMALL);
+    args.extend(["--exposure", "auto"]);
+    let out = radray(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // The stops printed are those of the EXR's radiance (which auto exposure leaves alone).
+    let radiance = radray::output::read_image(&exr).unwrap();
+    let stops = radray::output::auto_exposure_stops(&radiance);
+    let expected = format!("exposure {stops:+.3} stops (auto");
+    assert!(stderr(&out).contains(&expected), "{expected:?} not in {}", stderr(&out));
+    // The PNG is the EXR's radiance encoded with those stops, byte for byte.
+    let encoded = radray::output::encode_png(&radiance, &png, stops, radray::output::ToneCurve::Clamp).unwrap();
+    assert_eq!(std::fs::read(&png).unwrap(), encoded);
+}
+
+#[test]
+fn image_exposure_key_takes_stops_or_auto_and_names_the_line_of_anything_else() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_original/scene.obj");
+    let write = |name: &str, exposure: &str| {
+        let path = dir.path().join(name);
+        let text = format!("[image]\nwidth = 8\nheight = 8\nexposure = {exposure}\n\n[[mesh]]\nobj = {:?}\n", obj);
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    for (name, exposure) in [("stops.toml", "-1.5"), ("auto.toml", "\"auto\"")] {
+        let path = write(name, exposure);
+        let png = dir.path().join(format!("{name}.png"));
+        let out = radray(&["render", path.to_str().unwrap(), "-o", png.to_str().unwrap(), "--quality", "preview"]);
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+    }
+    let bad = write("bad.toml", "\"sideways\"");
+    let out = radray(&["render", bad.to_str().unwrap(), "-o", dir.path().join("bad.png").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("bad.toml:4:"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("\"auto\""), "{}", stderr(&out));
+}

@@ -28,6 +28,7 @@ fn settings(
         adaptive_threshold: None,
         adaptive_max_samples: samples_per_pixel,
         seed: 42,
+        exposure: Default::default(),
     }
 }
 

@@ -272,12 +272,19 @@ WALL = (0.72, 0.70, 0.66)
 CEIL = (0.78, 0.78, 0.76)
 
 
-def l_room():
+def room_model(floor_kd, wood=True):
+    """A model with the materials every room shares: white walls and ceiling, its floor, and wood."""
     m = Model()
     m.material("wall", Kd=WALL)
     m.material("ceiling", Kd=CEIL)
-    m.material("floor", Kd=(0.45, 0.32, 0.20))
-    m.material("wood", Kd=(0.50, 0.33, 0.18))
+    m.material("floor", Kd=floor_kd)
+    if wood:
+        m.material("wood", Kd=(0.50, 0.33, 0.18))
+    return m
+
+
+def l_room():
+    m = room_model((0.45, 0.32, 0.20))
     m.material("cabinet", Kd=(0.25, 0.38, 0.60))
     m.material("lamp", Kd=(0, 0, 0), Ke=(24.0, 21.6, 18.0))
     xs = [0.0, 1.5, 3.0, 4.5, 6.0]
@@ -309,11 +316,7 @@ def l_room():
 
 
 def gap_room():
-    m = Model()
-    m.material("wall", Kd=WALL)
-    m.material("ceiling", Kd=CEIL)
-    m.material("floor", Kd=(0.50, 0.48, 0.45))
-    m.material("wood", Kd=(0.50, 0.33, 0.18))
+    m = room_model((0.50, 0.48, 0.45))
     m.material("cabinet", Kd=(0.55, 0.25, 0.20))
     m.material("lamp", Kd=(0, 0, 0), Ke=(250.0, 250.0, 250.0))
     xs = [0.0, 1.0, 2.0, 2.8, 3.3, 4.0]
@@ -341,10 +344,7 @@ def gap_room():
 
 
 def alcove_hall():
-    m = Model()
-    m.material("wall", Kd=WALL)
-    m.material("ceiling", Kd=CEIL)
-    m.material("floor", Kd=(0.48, 0.45, 0.40))
+    m = room_model((0.48, 0.45, 0.40), wood=False)
     m.material("red", Kd=(0.63, 0.12, 0.08))
     m.material("green", Kd=(0.15, 0.45, 0.12))
     m.material("blue", Kd=(0.15, 0.20, 0.55))

@@ -12,7 +12,9 @@ pub use filter::{
     FilterSampler, FILTER_TABLE_BINS,
 };
 pub use image::{luminance, Image};
-pub use sampler::{multi_jittered, stratum_grid, Sampler};
+pub use sampler::{
+    multi_jittered, owen_scramble, owen_sobol_2d, sobol_2d_bits, stratum_grid, Pattern2d, PixelSampler, Sampler,
+};
 pub use tiles::{luminance_contrast, render, render_with, FilmStats, ADAPTIVE_CONTRAST_EPSILON, TILE_SIZE_PX};
 
 use crate::scene::ImageSettings;

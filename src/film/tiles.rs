@@ -57,7 +57,7 @@ impl FilmStats {
 /// Renders the film: for each pixel, `samples_per_pixel` multi-jittered points warped by the filter's
 /// importance sampler, `shade(x_px, y_px, sampler)` at each (film coordinates from the top-left; pixel
 /// (x, y) covers [x, x+1)×[y, y+1)), reconstructed by normalised weights; adaptive samples where the
-/// base samples disagree. Each pixel uses `Sampler::independent(seed, y·width + x)` for its jitter and passes it
+/// base samples disagree. Each pixel uses `Sampler::pixel(seed, y·width + x)` for its jitter and passes it
 /// on to the shader, so the image is the same whatever the thread count or tile order.
 /// `on_tile_done` is called (from worker threads) after each 16×16 tile.
 pub fn render<F>(settings: &ImageSettings, shade: F, on_tile_done: &(dyn Fn() + Sync)) -> (Image, FilmStats)
@@ -194,14 +194,14 @@ impl PixelPlan {
         F: Fn(&mut S, f32, f32, &mut Sampler) -> Vec3,
     {
         let pixel_index = y as u64 * self.width as u64 + x as u64;
-        let mut sampler = Sampler::independent(self.seed, pixel_index);
+        let mut sampler = Sampler::pixel(self.seed, pixel_index);
         scratch.radiance.clear();
         scratch.weights.clear();
         let centre = [x as f32 + 0.5, y as f32 + 0.5];
-        self.shade_batch(self.base_samples, centre, state, shade, &mut sampler, scratch, stats);
+        self.shade_batch(0, self.base_samples, centre, state, shade, &mut sampler, scratch, stats);
         if let Some((threshold, extra)) = self.adaptive {
             if luminance_contrast(&scratch.radiance) > threshold {
-                self.shade_batch(extra, centre, state, shade, &mut sampler, scratch, stats);
+                self.shade_batch(self.base_samples, extra, centre, state, shade, &mut sampler, scratch, stats);
                 stats.adaptive_extra_samples += extra as u64;
                 stats.adaptive_pixels += 1;
             }
@@ -209,10 +209,12 @@ impl PixelPlan {
         reconstruct_pixel(&scratch.radiance, &scratch.weights)
     }
 
-    /// Draws one multi-jittered batch of `count` samples, shades them and keeps the finite ones.
+    /// Draws one multi-jittered batch of `count` samples, the pixel's samples `first`, `first` + 1, …,
+    /// shades them and keeps the finite ones.
     #[allow(clippy::too_many_arguments)]
     fn shade_batch<S, F>(
         &self,
+        first: u32,
         count: u32,
         centre: [f32; 2],
         state: &mut S,
@@ -226,7 +228,8 @@ impl PixelPlan {
         let (columns, rows) = stratum_grid(count);
         scratch.points.clear();
         multi_jittered(columns, rows, sampler, &mut scratch.points);
-        for u in &scratch.points {
+        for (i, u) in scratch.points.iter().enumerate() {
+            sampler.start_sample(first + i as u32);
             let s = self.filter.sample(*u);
             let l = shade(state, centre[0] + s.offset_px[0], centre[1] + s.offset_px[1], sampler);
             stats.samples += 1;

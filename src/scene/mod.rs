@@ -67,6 +67,8 @@ pub struct ImageSettings {
     /// Most samples an adaptive pixel may take.
     pub adaptive_max_samples: u32,
     pub seed: u64,
+    /// PNG exposure (`[image] exposure`: stops or "auto"); `--exposure` overrides it.
+    pub exposure: crate::output::Exposure,
 }
 
 impl Default for ImageSettings {
@@ -80,6 +82,7 @@ impl Default for ImageSettings {
             adaptive_threshold: None,
             adaptive_max_samples: 64,
             seed: 0,
+            exposure: crate::output::Exposure::default(),
         }
     }
 }

@@ -73,6 +73,7 @@ struct RawImage {
     adaptive_threshold: Option<S<f32>>,
     adaptive_max_samples: Option<S<i64>>,
     seed: Option<u64>,
+    exposure: Option<S<crate::output::Exposure>>,
 }
 
 #[derive(Deserialize)]
@@ -433,6 +434,9 @@ fn image_settings(loc: &Locator, raw: Option<&RawImage>, base: ImageSettings) ->
     )?;
     if let Some(seed) = r.seed {
         s.seed = seed;
+    }
+    if let Some(e) = &r.exposure {
+        s.exposure = *e.get_ref();
     }
     Ok(s)
 }

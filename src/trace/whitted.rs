@@ -8,7 +8,9 @@ use std::ops::AddAssign;
 use glam::Vec3;
 
 use super::caustics::CausticMap;
+use super::cut_outs::{self, MAX_CUTOUT_CROSSINGS};
 use super::diffuse::{Diffuse, DiffuseEstimator};
+use super::direct_light::{DirectEstimate, DirectLight};
 use crate::accel::Accel;
 use crate::film::Sampler;
 use crate::mesh::Mesh;
@@ -92,7 +94,7 @@ pub struct Tracer<'a> {
     materials: &'a [Material],
     params: RenderParams,
     max_depth: u32,
-    emitters: Emitters,
+    direct: DirectLight<'a>,
     /// Distance ray origins are moved off a surface (scene units).
     offset: f32,
     /// The scene's surfaces, when their smooth-shading normals should bend specular rays.
@@ -104,9 +106,6 @@ pub struct Tracer<'a> {
     /// Angle one pixel subtends at the camera (radians), for texture footprints (`with_pixel_angle`).
     pixel_angle_rad: f32,
 }
-
-/// Most cut-out surfaces (opacity < ½) one ray passes through before it is stopped.
-const MAX_CUTOUT_CROSSINGS: u32 = 64;
 
 impl<'a> Tracer<'a> {
     pub fn new(
@@ -144,7 +143,13 @@ impl<'a> Tracer<'a> {
             materials,
             params: params.clone(),
             max_depth: params.max_depth.min(MAX_DEPTH_LIMIT),
-            emitters: Emitters::new(mesh, materials),
+            direct: DirectLight::new(
+                mesh,
+                accel,
+                Emitters::new(mesh, materials),
+                params.light_samples,
+                ray_offset(scale),
+            ),
             offset: ray_offset(scale),
             surfaces: None,
             caustics: None,
@@ -215,43 +220,8 @@ impl<'a> Tracer<'a> {
         None
     }
 
-    /// The surface's opacity map reads below ½ at `hit`, looked up over a footprint of `footprint`
-    /// scene units (false without a map or uv).
     fn is_cut_out(&self, hit: &SurfaceHit, footprint: f32) -> bool {
-        let mesh = self.mesh;
-        match mesh.textures.maps(hit.material).filter(|m| m.has_opacity()) {
-            Some(maps) if mesh.surface_has_uv.get(hit.surface as usize).copied().unwrap_or(false) => {
-                maps.opacity_at(hit.uv, footprint * hit.uv_per_length(mesh)) < 0.5
-            }
-            _ => false,
-        }
-    }
-
-    /// A shadow ray from `origin` along unit `dir` meets an opaque surface before `t_max`. Cut-outs
-    /// let it through where their opacity is below ½ (the finest texels: a shadow ray has no pixel
-    /// footprint), so a leaf's shadow has the leaf's holes; more than `MAX_CUTOUT_CROSSINGS` cut-outs
-    /// count as blocked. Without cut-outs in the scene this is the accelerator's any-hit query.
-    fn shadow_blocked(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        if !self.mesh.textures.has_cut_outs() {
-            return self.accel.occluded(origin, dir, t_max);
-        }
-        let mut from = origin;
-        let mut travelled = 0.0f32;
-        for _ in 0..=MAX_CUTOUT_CROSSINGS {
-            let Some(hit) = self.accel.closest_hit(from, dir, 0.0, t_max - travelled) else {
-                return false;
-            };
-            let surface_hit = SurfaceHit::new(self.mesh, &hit, dir);
-            if !self.is_cut_out(&surface_hit, 0.0) {
-                return true;
-            }
-            from = surface_hit.position + dir * self.offset;
-            travelled += hit.t + self.offset;
-            if travelled >= t_max {
-                return false;
-            }
-        }
-        true
+        cut_outs::is_cut_out(self.mesh, hit, footprint)
     }
 
     /// Builds a caustic map from the run's `photons` (`transport::photons`, the ones pass one's
@@ -272,7 +242,7 @@ impl<'a> Tracer<'a> {
 
     /// Total area of the emitting triangles (scene units²).
     pub fn emitter_area(&self) -> f32 {
-        self.emitters.total_area()
+        self.direct.emitters().total_area()
     }
 
     /// Distance by which secondary ray origins leave a surface.
@@ -288,7 +258,7 @@ impl<'a> Tracer<'a> {
     ///
     /// with L_d the diffuse term (`Diffuse::radiance`: the Gouraud-interpolated radiosity B(p)/π, or
     /// with `DirectMode::Pixel` its indirect part plus direct light from shadow rays, see
-    /// `direct_light`), the branches' weights from `transport::scatter` (R the unpolarised Fresnel
+    /// `DirectLight::estimate`), the branches' weights from `transport::scatter` (R the unpolarised Fresnel
     /// reflectance of a dielectric with index `Ni`), plus Phong highlights from the emitters. Rays
     /// deeper than `max_depth` or below `min_throughput` (`transport::scatter::carries`) are not
     /// traced; rays leaving the scene see black.
@@ -347,10 +317,10 @@ impl<'a> Tracer<'a> {
                 };
                 let needs_light =
                     (self.diffuse.needs_direct_light() && reflectance.max_element() > 0.0) || highlight.is_some();
-                let (irradiance, phong) = if needs_light {
-                    self.direct_light(p, facing, highlight, sampler, counts)
+                let light = if needs_light {
+                    self.direct.estimate(p, facing, highlight, sampler, counts)
                 } else {
-                    (Vec3::ZERO, Vec3::ZERO)
+                    DirectEstimate::default()
                 };
                 // Caustic detail: the LS+D light at pixel resolution minus the same at element resolution.
                 let caustic = match &self.caustics {
@@ -365,13 +335,14 @@ impl<'a> Tracer<'a> {
                     exitance,
                     reflectance,
                     texel_albedo.is_some(),
-                    irradiance,
+                    light.irradiance,
                     caustic,
                 );
                 radiance += ray.throughput * (diffuse + emission_swap);
                 if let Some((_, n)) = highlight {
                     // Normalised Phong lobe: f = Ks·(n + 2)/(2π)·cosⁿα.
-                    radiance += ray.throughput * material.specular_reflectance * ((n + 2.0) / (2.0 * PI)) * phong;
+                    radiance +=
+                        ray.throughput * material.specular_reflectance * ((n + 2.0) / (2.0 * PI)) * light.highlight;
                 }
             } else if mode == TraceMode::Radiosity || !material.is_dielectric() {
                 // Back of a one-sided surface: black, and the path ends (a dielectric is still
@@ -385,74 +356,5 @@ impl<'a> Tracer<'a> {
             stack.push_branches(&ray, &scatter(material, ray.dir, &hit), &hit, self.offset, self.params.min_throughput);
         }
         radiance
-    }
-
-    /// Light from the emitters at point `p` with unit normal `n` (on the side being shaded), by
-    /// `light_samples` shadow rays to points x_k chosen on the emitters by area (stratified in the
-    /// area-cumulative coordinate):
-    ///
-    /// irradiance ≈ (A/N) Σ_k V(p, x_k) L_e(x_k) cos θ_k cos θ'_k / r_k²,
-    ///
-    /// with A the total emitter area, θ at p, θ' at the emitter (only its emitting side counts). The
-    /// diffuse reflected radiance is ρ/π times it. With `highlight = (mirror direction r, exponent n)`
-    /// it also returns the same sum weighted by cosⁿα, α the angle between r and the light direction
-    /// (the Phong lobe without its Ks·(n + 2)/(2π) normalisation).
-    fn direct_light(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        highlight: Option<(Vec3, f32)>,
-        sampler: &mut Sampler,
-        counts: &mut RayCounts,
-    ) -> (Vec3, Vec3) {
-        let samples = self.params.light_samples;
-        if samples == 0 || self.emitters.is_empty() {
-            return (Vec3::ZERO, Vec3::ZERO);
-        }
-        let mesh = self.mesh;
-        let origin = p + n * self.offset;
-        let mut irradiance = Vec3::ZERO;
-        let mut phong = Vec3::ZERO;
-        for k in 0..samples {
-            let xi = (k as f32 + sampler.next_1d()) / samples as f32;
-            let r = sampler.next_1d();
-            let Some(sample) = self.emitters.sample(mesh, xi, r) else {
-                break;
-            };
-            let (t, x) = (sample.triangle as usize, sample.point);
-            let weight = sample.inverse_density / samples as f32;
-            let to_light = x - origin;
-            let dist2 = to_light.length_squared();
-            if dist2.is_nan() || dist2 <= 0.0 {
-                continue;
-            }
-            let dist = dist2.sqrt();
-            let w = to_light / dist;
-            let cos_here = n.dot(w);
-            if cos_here <= 0.0 {
-                continue;
-            }
-            let front_element = mesh.triangle_element[t] as usize;
-            let cos_front = -mesh.elements.normal[front_element].dot(w);
-            let Some(element) = mesh.side_element(t, cos_front > 0.0) else {
-                continue;
-            };
-            let cos_light = cos_front.abs();
-            let emitted_radiance = mesh.elements.emission[element] / PI;
-            if emitted_radiance.max_element() <= 0.0 || cos_light <= 0.0 {
-                continue;
-            }
-            counts.shadow += 1;
-            if self.shadow_blocked(origin, w, dist - self.offset) {
-                continue;
-            }
-            let contribution = emitted_radiance * (cos_here * cos_light / dist2 * weight);
-            irradiance += contribution;
-            if let Some((mirror, exponent)) = highlight {
-                let cos_alpha = mirror.dot(w).max(0.0);
-                phong += contribution * cos_alpha.powf(exponent);
-            }
-        }
-        (irradiance, phong)
     }
 }
