@@ -6,6 +6,7 @@
 
 pub mod accel;
 pub mod batch;
+pub mod burial;
 pub mod cache;
 pub mod cli;
 pub mod compare;

@@ -89,6 +89,9 @@ pub struct Mesh {
     /// (`map_d`, or the alpha of `map_Kd`); empty otherwise. Hemicubes skip elements with ᾱₑ < ½
     /// (`hidden_from_hemicubes`).
     pub element_coverage: Vec<f32>,
+    /// Per element: buried under the back of a one-sided surface (`burial::buried_elements`), left out
+    /// of `vertex_average`; empty when not computed (every element counts).
+    pub element_buried: Vec<bool>,
 }
 
 /// Texture coordinates at point `p` of a planar triangle or convex quad with corner uvs: for a
@@ -234,6 +237,7 @@ impl Mesh {
             + bytes(&self.surface_source)
             + bytes(&self.surface_has_uv)
             + bytes(&self.element_coverage)
+            + bytes(&self.element_buried)
     }
 
     /// Cuts every surface of the scene into elements of at most `max_element_edge` (see module docs).
@@ -486,7 +490,8 @@ impl Mesh {
 
     /// Per-vertex values from per-element values: the area-weighted mean over the elements that share
     /// the vertex (vertices are shared only within one surface side, so values never bleed across
-    /// surfaces). This is Gouraud's vertex interpolation of a radiosity solution.
+    /// surfaces). This is Gouraud's vertex interpolation of a radiosity solution. Buried elements
+    /// (`element_buried`) are left out, unless every element at the vertex is buried.
     pub fn vertex_average<T>(&self, element_values: &[T]) -> Vec<T>
     where
         T: Copy + Default + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
@@ -494,14 +499,24 @@ impl Mesh {
         assert_eq!(element_values.len(), self.elements.len());
         let mut sum = vec![T::default(); self.positions.len()];
         let mut weight = vec![0.0f64; self.positions.len()];
+        let mut buried_sum = vec![T::default(); self.positions.len()];
+        let mut buried_weight = vec![0.0f64; self.positions.len()];
         for (e, corners) in self.elements.corners.iter().enumerate() {
             let a = self.elements.area[e] as f64;
+            let buried = self.element_buried.get(e).copied().unwrap_or(false);
+            let (sum, weight) = if buried { (&mut buried_sum, &mut buried_weight) } else { (&mut sum, &mut weight) };
             for &v in corners.iter().filter(|&&v| v != NONE) {
                 sum[v as usize] = sum[v as usize] + element_values[e] * a;
                 weight[v as usize] += a;
             }
         }
-        sum.iter().zip(&weight).map(|(&s, &w)| if w > 0.0 { s * (1.0 / w) } else { s }).collect()
+        (0..sum.len())
+            .map(|v| match (weight[v] > 0.0, buried_weight[v] > 0.0) {
+                (true, _) => sum[v] * (1.0 / weight[v]),
+                (false, true) => buried_sum[v] * (1.0 / buried_weight[v]),
+                (false, false) => sum[v],
+            })
+            .collect()
     }
 
     /// The shading normal at `p` on `element`'s scene surface, oriented like `facing`: the surface's

@@ -330,7 +330,9 @@ pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh,
     }
     let stage = progress.stage("meshing", scene.surfaces.len() as u64, "surfaces");
     let textures = load_textures(scene, progress);
-    let mesh = Mesh::build_with_textures(scene, edge, Arc::new(textures));
+    let mut mesh = Mesh::build_with_textures(scene, edge, Arc::new(textures));
+    // Elements buried under the backs of one-sided surfaces stay out of the vertex averages.
+    mesh.element_buried = crate::burial::buried_elements(&mesh);
     stage.finish(&format!(
         "{} surfaces → {} elements, {} triangles",
         scene.surfaces.len(),

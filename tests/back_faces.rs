@@ -90,3 +90,68 @@ fn info_reports_the_share_and_suggests_two_sided_and_render_warns() {
     let text = String::from_utf8_lossy(&radray(&["info", &fixed]).stdout).into_owned();
     assert!(text.contains("back faces      0.0%") && !text.contains("suggestion"), "{text}");
 }
+
+/// A 4 × 4 floor at z = 0 facing up cut into 1 × 1 elements, a closed block [−2, 0] × [−2, 0] × [0, 1]
+/// of one-sided outward faces standing on it, and an emitter [−2, 2]² at z = 3 facing down.
+fn block_scene() -> Mesh {
+    let q = |a: [f32; 3], b: [f32; 3], c: [f32; 3], d: [f32; 3], m| {
+        common::surface([a, b, c, d].map(glam::Vec3::from), m, false)
+    };
+    let (x0, x1, y0, y1, h) = (-2.0, 0.0, -2.0, 0.0, 1.0);
+    let surfaces = vec![
+        q([-2.0, -2.0, 0.0], [2.0, -2.0, 0.0], [2.0, 2.0, 0.0], [-2.0, 2.0, 0.0], 0),
+        q([-2.0, -2.0, 3.0], [-2.0, 2.0, 3.0], [2.0, 2.0, 3.0], [2.0, -2.0, 3.0], 1),
+        q([x0, y0, h], [x1, y0, h], [x1, y1, h], [x0, y1, h], 0),
+        q([x0, y0, 0.0], [x1, y0, 0.0], [x1, y0, h], [x0, y0, h], 0),
+        q([x1, y0, 0.0], [x1, y1, 0.0], [x1, y1, h], [x1, y0, h], 0),
+        q([x1, y1, 0.0], [x0, y1, 0.0], [x0, y1, h], [x1, y1, h], 0),
+        q([x0, y1, 0.0], [x0, y0, 0.0], [x0, y0, h], [x0, y1, h], 0),
+    ];
+    let s = scene(vec![grey(), common::emitter("light", glam::Vec3::ONE)], surfaces);
+    Mesh::build(&s, 1.0)
+}
+
+/// Floor elements (material 0 at z = 0) under the block and in the open.
+fn floor_elements(mesh: &Mesh) -> (Vec<usize>, Vec<usize>) {
+    let e = &mesh.elements;
+    let floor: Vec<usize> = (0..e.len()).filter(|&i| e.centre[i].z == 0.0 && e.normal[i].z > 0.5).collect();
+    floor.into_iter().partition(|&i| e.centre[i].x < 0.0 && e.centre[i].y < 0.0)
+}
+
+#[test]
+fn pass_one_sees_the_back_of_a_one_sided_block_as_opaque() {
+    let mesh = block_scene();
+    let ff = radray::radiosity::form_factors::compute(&mesh, &common::hemicube_params(64), &|| {});
+    let emitter: Vec<usize> = (0..mesh.elements.len()).filter(|&i| mesh.elements.material[i] == 1).collect();
+    let to_emitter = |i: usize| emitter.iter().map(|&j| ff.get(i, j)).sum::<f64>();
+    let (under, open) = floor_elements(&mesh);
+    assert_eq!(under.len(), 4);
+    for i in under {
+        // Seen from inside, the block's faces are backs: opaque, as pass two sees them.
+        assert_eq!(to_emitter(i), 0.0, "floor element {i} under the block sees the lamp");
+        let row_sum: f64 = ff.row(i).1.iter().map(|&f| f as f64).sum();
+        assert_eq!(row_sum, 0.0, "the backs themselves carry no form factor");
+    }
+    assert!(open.iter().all(|&i| to_emitter(i) > 0.05), "the open floor sees the lamp");
+}
+
+#[test]
+fn elements_under_a_block_are_buried_and_left_out_of_vertex_averages() {
+    let mut mesh = block_scene();
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let share = radray::burial::hidden_share(&mesh, &accel);
+    let (under, open) = floor_elements(&mesh);
+    assert!(under.iter().all(|&i| share[i] == 1.0), "every ray from under the block meets its inside");
+    assert!(open.iter().all(|&i| share[i] == 0.0), "the open floor sees no back face");
+    mesh.element_buried = radray::burial::buried_elements(&mesh);
+    // Buried elements read 0 and open ones 1: a vertex on the block's rim averages only open elements;
+    // one surrounded by buried elements keeps their value.
+    let values: Vec<f64> = (0..mesh.elements.len()).map(|i| if mesh.element_buried[i] { 0.0 } else { 1.0 }).collect();
+    let vertex = mesh.vertex_average(&values);
+    let at = |p: glam::Vec3| {
+        let v = mesh.positions.iter().position(|&q| q == p).expect("a floor vertex there");
+        vertex[v]
+    };
+    assert_eq!(at(glam::Vec3::new(0.0, 0.0, 0.0)), 1.0, "rim corner: three open elements, one buried");
+    assert_eq!(at(glam::Vec3::new(-1.0, -1.0, 0.0)), 0.0, "inside the footprint: all buried");
+}

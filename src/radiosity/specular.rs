@@ -243,7 +243,8 @@ impl<'a> SpecularPaths<'a> {
         let mut rng = Pcg32::new(seed, element as u64);
         let mut stats = SpecularStats::default();
         buffers.for_each_covered_pixel(hc, |pixel, item, delta| {
-            if !self.specular[item as usize] {
+            // Items past the elements are the backs of one-sided surfaces (`element_row`'s occluder).
+            if !self.specular.get(item as usize).copied().unwrap_or(false) {
                 return;
             }
             stats.pixels += 1;

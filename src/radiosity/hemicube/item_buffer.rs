@@ -151,10 +151,73 @@ impl ItemBuffer {
             self.add_polygon(hc, item, &corners, normal, centre);
             return;
         }
+        self.add_indexed(hc, item, None, positions, indices, normal, centre);
+    }
+
+    /// `add_indexed_polygon`, except that when the polygon is back-facing it is still drawn, as the
+    /// item `occluder`: a one-sided surface seen from behind is opaque (pass two sees it black), so it
+    /// must hide what lies behind it, or light leaks through closed solids and under furniture. The
+    /// caller drops `occluder`'s form factor.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_indexed_polygon_or_occluder(
+        &mut self,
+        hc: &Hemicube,
+        item: u32,
+        occluder: u32,
+        positions: &[Vec3],
+        indices: &[u32],
+        normal: Vec3,
+        centre: Vec3,
+    ) {
+        if indices.len() < 3 {
+            return;
+        }
+        if indices.len() > MAX_INPUT_CORNERS {
+            let plane_offset = (centre - self.frame.eye).dot(normal);
+            let corners: Vec<Vec3> = indices.iter().map(|&v| positions[v as usize]).collect();
+            if plane_offset > 0.0 {
+                let reversed: Vec<Vec3> = corners.iter().rev().copied().collect();
+                self.add_polygon(hc, occluder, &reversed, -normal, centre);
+            } else {
+                self.add_polygon(hc, item, &corners, normal, centre);
+            }
+            return;
+        }
+        self.add_indexed(hc, item, Some(occluder), positions, indices, normal, centre);
+    }
+
+    /// The shared body of the indexed adds: back-facing polygons are culled, or drawn (corners reversed,
+    /// so that they face the eye) as `occluder` when one is given.
+    #[allow(clippy::too_many_arguments)]
+    fn add_indexed(
+        &mut self,
+        hc: &Hemicube,
+        item: u32,
+        occluder: Option<u32>,
+        positions: &[Vec3],
+        indices: &[u32],
+        normal: Vec3,
+        centre: Vec3,
+    ) {
         debug_assert_eq!(self.inverse_depth.len(), hc.pixel_count(), "begin() was called with another hemicube");
-        let plane_offset = (centre - self.frame.eye).dot(normal);
-        if plane_offset.is_nan() || plane_offset >= 0.0 {
-            return; // back-facing, edge-on or NaN
+        let mut plane_offset = (centre - self.frame.eye).dot(normal);
+        let mut normal = normal;
+        let mut item = item;
+        let mut reversed = false;
+        if plane_offset.is_nan() || plane_offset == 0.0 {
+            return; // edge-on or NaN
+        }
+        if plane_offset > 0.0 {
+            match occluder {
+                // The same plane m·p = d seen from the other side: (−m, −d), corners reversed.
+                Some(occluder) => {
+                    item = occluder;
+                    normal = -normal;
+                    plane_offset = -plane_offset;
+                    reversed = true;
+                }
+                None => return, // back-facing
+            }
         }
         if self.vertex_stamp.len() < positions.len() {
             self.vertex_local.resize(positions.len(), Vec3::ZERO);
@@ -173,6 +236,9 @@ impl ItemBuffer {
             }
             *l = self.vertex_local[v];
             code &= self.vertex_code[v];
+        }
+        if reversed {
+            local[..indices.len()].reverse();
         }
         self.queue_polygon(item, &local[..indices.len()], code, normal, plane_offset);
     }

@@ -148,6 +148,9 @@ struct Chunk {
     /// Shared plane (normal, offset n·x) when every element lies in it: then the whole chunk is
     /// back-facing exactly when one element is.
     plane: Option<(Vec3, f32)>,
+    /// The chunk's surface is one side of a two-sided surface: its other side lies in the same plane
+    /// facing the other way, so seen from behind it needs no occluder (the twin is drawn).
+    two_sided: bool,
 }
 
 const CHUNK_ELEMENTS: usize = 64;
@@ -156,6 +159,13 @@ const CHUNK_ELEMENTS: usize = 64;
 /// chunks, then elements) for per-hemicube frustum and back-face culling.
 fn build_chunks(mesh: &Mesh) -> Vec<Chunk> {
     let e = &mesh.elements;
+    // Scene surfaces that were meshed on both sides (two mesh surfaces share the source).
+    let mut sides = vec![0u8; mesh.surface_source.iter().map(|&s| s as usize + 1).max().unwrap_or(0)];
+    for &source in &mesh.surface_source {
+        sides[source as usize] = sides[source as usize].saturating_add(1);
+    }
+    let two_sided =
+        |surface: u32| mesh.surface_source.get(surface as usize).is_some_and(|&source| sides[source as usize] >= 2);
     let mut chunks = Vec::new();
     let mut start = 0;
     while start < e.len() {
@@ -177,7 +187,13 @@ fn build_chunks(mesh: &Mesh) -> Vec<Chunk> {
             e.normal[i].dot(n0) > 1.0 - 1e-6
                 && e.polygon(&mesh.positions, i).all(|p| (n0.dot(p) - offset).abs() <= tolerance)
         });
-        chunks.push(Chunk { elements: start..end, min, max, plane: planar.then_some((n0, offset)) });
+        chunks.push(Chunk {
+            elements: start..end,
+            min,
+            max,
+            plane: planar.then_some((n0, offset)),
+            two_sided: two_sided(e.surface[start]),
+        });
         start = end;
     }
     chunks
@@ -219,9 +235,10 @@ impl ElementHierarchy {
 
     /// Row i of F: a hemicube at element i's centre (lifted by a thousandth of the element's size along
     /// its normal), aligned with the normal and rotated by `hemicube_rotation_rad`, seeing every other
-    /// element (Cohen and Greenberg 1985). Chunks behind the eye's plane, back-facing or outside all
-    /// five face frusta are skipped whole, and so are mostly cut-out elements
-    /// (`Mesh::hidden_from_hemicubes`). Appends (j, F_ij) with increasing j to `row`.
+    /// element (Cohen and Greenberg 1985). One-sided elements seen from behind are drawn as occluders
+    /// (opaque, no form factor), as pass two sees them; back-facing sides of two-sided surfaces,
+    /// chunks outside all five face frusta and mostly cut-out elements (`Mesh::hidden_from_hemicubes`)
+    /// are skipped. Appends (j, F_ij) with increasing j to `row`.
     pub fn element_row(
         &self,
         mesh: &Mesh,
@@ -235,10 +252,11 @@ impl ElementHierarchy {
         let normal = e.normal[i];
         let eye = e.centre[i] + normal * eye_offset(e.area[i]);
         buffers.begin(hc, HemicubeFrame::new(eye, normal, hemicube_rotation_rad(params, i)));
+        let occluder = e.len() as u32;
         for chunk in &self.chunks {
             if let Some((n, offset)) = chunk.plane {
-                if n.dot(eye) <= offset {
-                    continue; // the eye is behind (or in) the chunk's plane: every element is back-facing
+                if chunk.two_sided && n.dot(eye) <= offset {
+                    continue; // behind (or in) the plane of a two-sided side: its twin is drawn instead
                 }
             }
             if buffers.box_is_invisible(chunk.min, chunk.max) {
@@ -249,10 +267,27 @@ impl ElementHierarchy {
                     continue;
                 }
                 let corners = &e.corners[j][..e.corner_count(j)];
-                buffers.add_indexed_polygon(hc, j as u32, &mesh.positions, corners, e.normal[j], e.centre[j]);
+                if chunk.two_sided {
+                    buffers.add_indexed_polygon(hc, j as u32, &mesh.positions, corners, e.normal[j], e.centre[j]);
+                } else {
+                    let (normal, centre) = (e.normal[j], e.centre[j]);
+                    buffers.add_indexed_polygon_or_occluder(
+                        hc,
+                        j as u32,
+                        occluder,
+                        &mesh.positions,
+                        corners,
+                        normal,
+                        centre,
+                    );
+                }
             }
         }
-        buffers.finish(hc, |j, f| row.push((j, f as f32)));
+        buffers.finish(hc, |j, f| {
+            if j != occluder {
+                row.push((j, f as f32))
+            }
+        });
     }
 }
 
