@@ -8,7 +8,6 @@ use std::ops::AddAssign;
 use glam::{Vec2, Vec3};
 
 use super::caustics::CausticMap;
-use super::cut_outs::{self, MAX_CUTOUT_CROSSINGS};
 use super::diffuse::{Diffuse, DiffuseEstimator};
 use super::direct_light::{DirectEstimate, DirectLight};
 use super::gather::FinalGather;
@@ -19,6 +18,7 @@ use crate::material::MaterialMaps;
 use crate::mesh::Mesh;
 use crate::radiosity::Solution;
 use crate::scene::{Material, RenderParams, Surface};
+use crate::transport::cut_outs::OpaqueRay;
 use crate::transport::emitters::Emitters;
 use crate::transport::hit::{ray_offset, scene_scale};
 use crate::transport::optics::reflect;
@@ -238,28 +238,12 @@ impl<'a> Tracer<'a> {
         self.params.min_throughput
     }
 
-    /// The closest hit along a ray that is not cut out: surfaces whose opacity map reads below ½ at
-    /// the hit are passed through (at most `MAX_CUTOUT_CROSSINGS` of them). Returns the hit and the
-    /// distance from `origin`.
+    /// The closest hit along a ray that is not cut out (`transport::cut_outs`, with this tracer's pixel
+    /// footprint), and its distance from `origin`.
     pub fn closest_opaque_hit(&self, origin: Vec3, dir: Vec3) -> Option<(SurfaceHit, f32)> {
-        let mesh = self.mesh;
-        let mut from = origin;
-        let mut travelled = 0.0f32;
-        for _ in 0..=MAX_CUTOUT_CROSSINGS {
-            let hit = self.accel.closest_hit(from, dir, 0.0, f32::INFINITY)?;
-            let surface_hit = SurfaceHit::new(mesh, &hit, dir);
-            let distance = travelled + hit.t;
-            if !self.is_cut_out(&surface_hit, distance * self.pixel_angle_rad) {
-                return Some((surface_hit, distance));
-            }
-            from = surface_hit.position + dir * self.offset;
-            travelled = distance + self.offset;
-        }
-        None
-    }
-
-    fn is_cut_out(&self, hit: &SurfaceHit, footprint: f32) -> bool {
-        cut_outs::is_cut_out(self.mesh, hit, footprint)
+        let ray =
+            OpaqueRay { mesh: self.mesh, accel: self.accel, offset: self.offset, spread_rad: self.pixel_angle_rad };
+        ray.closest_hit(origin, dir, f32::INFINITY)
     }
 
     /// Builds a caustic map from the run's `photons` (`transport::photons`, the ones pass one's
