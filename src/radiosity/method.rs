@@ -250,12 +250,14 @@ impl FullMatrix {
         let params = &scene.radiosity;
         let shard = resume.shard();
         let keys = scene_keys(scene, mesh);
+        let load_start = Instant::now();
         let known = if !resume.merge.is_empty() {
             Some(resume::merge_parts(&resume.merge, keys)?)
         } else {
             resume.checkpoint.as_ref().and_then(|path| resume::load_checkpoint(path, keys, shard, progress))
         };
         let known = known.as_ref();
+        let load_seconds = load_start.elapsed().as_secs_f64();
         let mut checkpointer = resume
             .checkpoint
             .as_ref()

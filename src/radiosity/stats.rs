@@ -50,8 +50,10 @@ pub struct PassOneStats {
 pub struct ResumeStats {
     /// Rows copied from the checkpoint or the merged parts (including empty rows of black elements).
     pub rows_resumed: usize,
-    /// Rows whose hemicubes this run computed.
+    /// Rows this run finished (including empty rows of black elements).
     pub rows_computed: usize,
+    /// Reading and checking the checkpoint or the parts.
+    pub load_seconds: f64,
     pub checkpoint_writes: u32,
     pub checkpoint_seconds: f64,
 }
