@@ -288,6 +288,7 @@ impl FullMatrix {
         stats.resume = (resume.checkpoint.is_some() || resume.needs_matrix()).then(|| ResumeStats {
             rows_resumed: resumed,
             rows_computed: rows.done_count() - resumed,
+            load_seconds,
             ..Default::default()
         });
         if let Some(checkpointer) = checkpointer.as_mut() {
