@@ -9,13 +9,16 @@ Examples:
   radray render scenes/cornell_box.toml -o cornell.png -o cornell.exr
   radray render scenes/cornell_specular.toml -o spec.png --mode both --direct pixel --spp 64
   radray solve scenes/cornell_box.toml -o cornell.radsol
+  radray solve scenes/cornell_box.toml --shard 0/3 -o part.0   (then 1/3, 2/3, on any machines)
+  radray solve scenes/cornell_box.toml --merge part.0 part.1 part.2 -o cornell.radsol
   radray render scenes/cornell_box.toml --solution cornell.radsol -o view.exr --width 512 --height 512
   radray compare out.exr references/cornell_original/reference.exr --diff diff.png --json
   radray batch jobs.toml --manifest jobs.manifest.json --shard 0/4
   radray batch jobs.toml --report report.html --resume
   radray info scenes/cornell_box.toml
 
-Exit codes: 0 success, 2 bad input or usage, 1 internal error.";
+Exit codes: 0 success, 2 bad input or usage, 1 internal error, 130/143 interrupted by SIGINT/SIGTERM
+(`render` and `solve` keep OUT.partial; rerun the same command to resume).";
 
 #[derive(Parser, Debug)]
 #[command(name = "radray", version, about = "Two-pass renderer: hemicube radiosity, then Whitted ray tracing", after_help = EXAMPLES)]
@@ -170,6 +173,20 @@ pub struct SolveArgs {
     /// The pass-one method, as the scene's `[radiosity] method`.
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
+    /// Compute only the form-factor rows of every N-th receiver group, starting at K (0-based), and
+    /// write them to -o as a part for --merge.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, conflicts_with = "merge")]
+    pub shard: Option<Shard>,
+    /// Join the parts of `--shard 0/N` … `--shard N-1/N` (each exactly once) and solve.
+    #[arg(long, value_name = "PART", num_args = 1..)]
+    pub merge: Vec<PathBuf>,
+}
+
+fn parse_shard_arg(text: &str) -> Result<Shard, String> {
+    let (index, count) = batch::parse_shard(text)?;
+    let index = u32::try_from(index).map_err(|_| format!("--shard: {index} is too large"))?;
+    let count = u32::try_from(count).map_err(|_| format!("--shard: {count} is too large"))?;
+    Ok(Shard { index, count })
 }
 
 #[derive(Args, Debug)]
@@ -227,8 +244,10 @@ pub struct InfoArgs {
 
 use crate::batch;
 use crate::compare;
+use crate::interrupt::Cancel;
 use crate::output::{self, Exposure, ToneCurve};
 use crate::progress::{Progress, Verbosity};
+use crate::radiosity::resume::{self, Resume, Shard};
 use crate::run::{self, Failure, Job, Mode, Outcome, PngSettings, Runner, Work};
 use crate::scene::{DirectMode, FinalGatherMode, MethodChoice, Overrides, Quality};
 
@@ -332,7 +351,8 @@ fn render_command(args: &RenderArgs, progress: &Progress) -> Result<(), Failure>
         },
     };
     let mut outcome = Outcome::default();
-    Runner::single().run(&job, progress, &mut outcome)?;
+    let resume = resumable(args.output.first().map(|o| resume::checkpoint_path(o)))?;
+    Runner::resumable(resume).run(&job, progress, &mut outcome)?;
     for path in &outcome.written {
         if progress.verbosity() == Verbosity::Verbose {
             eprintln!("wrote {}", path.display());
@@ -351,8 +371,19 @@ fn solve_command(args: &SolveArgs, progress: &Progress) -> Result<(), Failure> {
     };
     let job = Job { scene: args.scene.clone(), overrides, work: Work::Solve { output: args.output.clone() } };
     let mut outcome = Outcome::default();
-    Runner::single().run(&job, progress, &mut outcome)?;
+    // A merge computes no rows, so it keeps no checkpoint.
+    let checkpoint = args.merge.is_empty().then(|| resume::checkpoint_path(&args.output));
+    let resume = Resume { shard: args.shard, merge: args.merge.clone(), ..resumable(checkpoint)? };
+    Runner::resumable(resume).run(&job, progress, &mut outcome)?;
     run::write_stats(args.stats.as_deref(), &mut outcome.stats)
+}
+
+/// A single run's `Resume`: the checkpoint beside its output, and a cancellation that SIGINT and
+/// SIGTERM request.
+fn resumable(checkpoint: Option<PathBuf>) -> Result<Resume, Failure> {
+    let cancel = Cancel::default();
+    cancel.install_signal_handlers().map_err(Failure::internal)?;
+    Ok(Resume { checkpoint, interval: resume::CHECKPOINT_INTERVAL, cancel, ..Default::default() })
 }
 
 fn compare_command(args: &CompareArgs) -> Result<(), Failure> {

@@ -12,6 +12,7 @@ pub mod cli;
 pub mod compare;
 pub mod film;
 pub mod info;
+pub mod interrupt;
 pub mod material;
 pub mod mesh;
 pub mod output;

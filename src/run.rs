@@ -22,7 +22,9 @@ use crate::mesh::{self, Mesh};
 use crate::output::{self, Exposure, OutputError, ToneCurve};
 use crate::progress::{Progress, Verbosity};
 use crate::radiosity::hierarchical;
+use crate::radiosity::matrix::rows_file::RowsFileError;
 use crate::radiosity::method::{self, MethodError, Reuse};
+use crate::radiosity::resume::{self, Checkpointer, Resume};
 use crate::radiosity::solution_file::{self, SolutionFileError};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
@@ -69,11 +71,23 @@ macro_rules! exit_code_of {
     };
 }
 
+impl From<MethodError> for Failure {
+    /// An interrupted run exits with 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
+    fn from(e: MethodError) -> Self {
+        match e {
+            MethodError::Interrupted { signal, .. } => {
+                Failure { exit_code: crate::interrupt::exit_code(signal), error: e.into() }
+            }
+            e => Failure::input(e),
+        }
+    }
+}
+
 exit_code_of! {
     SceneError => input,
     OverrideError => input,
     MeshError => input,
-    MethodError => input,
+    RowsFileError => input,
     SolutionFileError => input,
     OutputError => input,
     CompareError => input,
@@ -133,7 +147,8 @@ pub enum Work {
     /// Images, one per planned output (from `output_plan`), from a solved or a loaded solution, and
     /// a layered EXR (`layers::write_layers`) when `layers` names one.
     Render { plan: Vec<(TraceMode, PathBuf)>, png: PngSettings, solution: Option<PathBuf>, layers: Option<PathBuf> },
-    /// The solution file.
+    /// The solution file; with `Resume::shard` set (`Runner::resumable`), the shard's rows instead
+    /// (a part for `solve --merge`).
     Solve { output: PathBuf },
 }
 
@@ -173,6 +188,12 @@ impl Runner {
         Runner { reuse: Reuse::none(), solutions: None }
     }
 
+    /// A runner for one job that keeps a checkpoint, computes a shard or merges parts as `resume`
+    /// says, and stops cleanly when its cancellation is requested.
+    pub fn resumable(resume: Resume) -> Self {
+        Runner { reuse: Reuse::resumable(resume), solutions: None }
+    }
+
     /// A runner for a batch: form factors and solutions are shared between jobs, within the default
     /// cache budget.
     pub fn batch() -> Self {
@@ -198,7 +219,25 @@ impl Runner {
         };
         // One set of photons for both passes of this job (traced only if a pass needs them).
         let photons = RunPhotons::default();
+        if let (Work::Solve { output }, Some(shard)) = (&job.work, self.reuse.resume.shard) {
+            let matrix = method::matrix_for_shards(&scene).map_err(MethodError::from)?;
+            let mesh = build_mesh(&scene, progress)?;
+            let (rows, stats) = matrix.shard_rows(&scene, &mesh, &photons, &self.reuse.resume, progress)?;
+            outcome.stats.pass_one = stats;
+            resume::write_part(output, method::scene_keys(&scene, &mesh), shard, &rows)?;
+            outcome.written.push(output.clone());
+            self.remove_checkpoint();
+            return Ok(());
+        }
         let (mesh, solution) = self.pass_one(&scene, solution_file, &photons, progress, outcome)?;
+        // Pass one is done: from here a signal ends the run at once (its checkpoint, if any, is kept);
+        // one that came while a solution was loaded ends it here.
+        let cancel = &self.reuse.resume.cancel;
+        cancel.exit_at_once(true);
+        if let Some(signal) = cancel.signal() {
+            let checkpoint = self.reuse.resume.checkpoint.clone().filter(|p| p.exists());
+            return Err(MethodError::Interrupted { signal, checkpoint }.into());
+        }
         match &job.work {
             Work::Solve { output } => {
                 solution.save(output)?;
@@ -213,7 +252,15 @@ impl Runner {
                 }
             }
         }
+        self.remove_checkpoint();
         Ok(())
+    }
+
+    /// Removes the run's checkpoint once its output is written.
+    fn remove_checkpoint(&self) {
+        if let Some(path) = &self.reuse.resume.checkpoint {
+            Checkpointer::remove(path);
+        }
     }
 
     /// Pass one for a scene: the mesh and its solution, loaded from `solution_file`, reused from an
@@ -231,7 +278,24 @@ impl Runner {
             outcome.stats.pass_one.elements = mesh.elements.len();
             return Ok((mesh, solution));
         }
-        let method = method::for_scene(scene);
+        let resume = &self.reuse.resume;
+        let method: Box<dyn method::PassOneMethod> = if resume.needs_matrix() {
+            Box::new(method::matrix_for_shards(scene).map_err(MethodError::from)?)
+        } else {
+            method::for_scene(scene)
+        };
+        if !method.checkpoints() && resume.checkpoint.is_some() {
+            progress.note(&format!(
+                "warning: the {} method keeps no checkpoint: if this run is interrupted, rerunning it restarts \
+                 pass one from the beginning",
+                method.name()
+            ));
+            // Nothing to save: a signal ends the run at once (one that came already ends it here).
+            resume.cancel.exit_at_once(true);
+            if let Some(signal) = resume.cancel.signal() {
+                return Err(MethodError::Interrupted { signal, checkpoint: None }.into());
+            }
+        }
         let mesh = if method.uses_uniform_mesh() {
             build_mesh(scene, progress)?
         } else {

@@ -7,14 +7,16 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use super::fingerprint;
+use super::fingerprint::form_factor_key;
 use super::hierarchical::Hierarchical;
 use super::hierarchy::HierarchyError;
-use super::matrix::{form_factors, FormFactors};
+use super::matrix::{form_factors, FormFactors, PartialRows, RowPlan};
 use super::matrix_free;
+use super::resume::{self, Checkpointer, Resume, SceneKeys, ShardError};
 use super::solution::Solution;
 use super::solver;
 use super::specular::{self, SpecularPaths};
-use super::stats::PassOneStats;
+use super::stats::{PassOneStats, ResumeStats};
 use crate::accel::Accel;
 use crate::cache::Lru;
 use crate::mesh::Mesh;
@@ -31,6 +33,13 @@ pub enum MethodError {
     HierarchyOverBudget { scene: String, triangles: usize, needed_gib: f64, budget_gib: f64 },
     #[error("{scene}: {source}")]
     Hierarchy { scene: String, source: HierarchyError },
+    #[error("interrupted by {}{}", crate::interrupt::signal_name(*signal), match checkpoint {
+        Some(path) => format!("; the finished form-factor rows are saved in {}: run the same command again to resume", path.display()),
+        None => String::new(),
+    })]
+    Interrupted { signal: usize, checkpoint: Option<std::path::PathBuf> },
+    #[error(transparent)]
+    Shard(#[from] ShardError),
 }
 
 /// What pass one made: the mesh the solution belongs to, the solution, and what was measured.
@@ -44,18 +53,27 @@ pub struct PassOne {
 }
 
 /// Work that later jobs of a batch may reuse, keyed by what it depends on
-/// (`fingerprint::form_factor_key`). `Reuse::none()` keeps nothing, for a single run.
+/// (`fingerprint::form_factor_key`), and work that earlier or parallel runs left (`Resume`: a
+/// checkpoint, merged shard parts). `Reuse::none()` keeps nothing, for a single run.
 #[derive(Debug, Default)]
 pub struct Reuse {
     keep: bool,
     /// Form factors of earlier scenes, least recently used out beyond the budget: matrices are large.
     form_factors: Lru<Arc<FormFactors>>,
+    /// The checkpoint, shard and merged parts of a single run, and its cancellation.
+    pub resume: Resume,
 }
 
 impl Reuse {
     /// Keeps nothing: a single run frees its matrix as soon as it is solved.
     pub fn none() -> Self {
-        Reuse { keep: false, form_factors: Lru::default() }
+        Reuse { keep: false, form_factors: Lru::default(), resume: Resume::default() }
+    }
+
+    /// Keeps nothing across jobs, but resumes from and keeps a checkpoint, computes a shard or solves
+    /// merged parts as `resume` says.
+    pub fn resumable(resume: Resume) -> Self {
+        Reuse { resume, ..Reuse::none() }
     }
 
     /// Keeps scenes' form factors for the jobs after them, within the default budget.
@@ -65,7 +83,7 @@ impl Reuse {
 
     /// Keeps scenes' form factors for the jobs after them, at most `budget_bytes` of them.
     pub fn across_jobs_within(budget_bytes: u64) -> Self {
-        Reuse { keep: true, form_factors: Lru::new(budget_bytes) }
+        Reuse { keep: true, form_factors: Lru::new(budget_bytes), resume: Resume::default() }
     }
 }
 
@@ -79,6 +97,12 @@ pub trait PassOneMethod {
     /// scene's textures, and returns the mesh it solved on.
     fn uses_uniform_mesh(&self) -> bool {
         true
+    }
+
+    /// Whether `solve` keeps a checkpoint and stops cleanly on `Reuse::resume`'s cancellation. A
+    /// method that does not restarts from the beginning when its run is interrupted.
+    fn checkpoints(&self) -> bool {
+        false
     }
 
     /// Refuses a scene whose working memory could not fit, before it is allocated.
@@ -211,31 +235,82 @@ pub struct FullMatrix {
 
 impl FullMatrix {
     /// Hemicube form factors of every element (rows only where an element reflects or emits),
-    /// extended through the scene's specular surfaces when it has any.
+    /// extended through the scene's specular surfaces when it has any: the rows `resume` asks for
+    /// (one shard's, or all), starting from its merged parts or checkpoint and keeping the checkpoint
+    /// up to date. Stops early, saving the checkpoint, when the run is cancelled.
     fn compute_form_factors(
         &self,
         scene: &SceneDescription,
         mesh: &Mesh,
         photons: &RunPhotons,
+        resume: &Resume,
         progress: &Progress,
         stats: &mut PassOneStats,
-    ) -> FormFactors {
+    ) -> Result<PartialRows, MethodError> {
         let params = &scene.radiosity;
+        let shard = resume.shard();
+        let keys = scene_keys(scene, mesh);
+        let load_start = Instant::now();
+        let known = if !resume.merge.is_empty() {
+            Some(resume::merge_parts(&resume.merge, keys)?)
+        } else {
+            resume.checkpoint.as_ref().and_then(|path| resume::load_checkpoint(path, keys, shard, progress))
+        };
+        let known = known.as_ref();
+        let load_seconds = load_start.elapsed().as_secs_f64();
+        let mut checkpointer = resume
+            .checkpoint
+            .as_ref()
+            .map(|path| Checkpointer::new(path.clone(), keys, shard, mesh.elements.len(), resume.interval));
         let accel = specular_accel(scene, mesh);
         let stage = progress.stage("form factors", mesh.elements.len() as u64, "elements");
         let start = Instant::now();
-        let ff = match &accel {
-            Some(accel) => {
-                let paths = specular_paths(scene, mesh, accel, photons);
-                let (ff, specular_stats) = form_factors::compute_extended(mesh, params, &paths, &|| stage.inc(1));
-                stats.specular_pixels = specular_stats.pixels;
-                stats.specular_rays = specular_stats.rays;
-                stats.extended_nonzeros = specular_stats.entries;
-                ff
+        let cancel = &resume.cancel;
+        let paths = accel.as_ref().map(|accel| specular_paths(scene, mesh, accel, photons));
+        let mut after_batch = |rows: &PartialRows| {
+            if let Some(checkpointer) = checkpointer.as_mut() {
+                checkpointer.maybe_write(rows);
             }
-            None => form_factors::compute(mesh, params, &|| stage.inc(1)),
         };
+        let plan = RowPlan {
+            known,
+            selected: &|i| shard.selects(i),
+            stop: &|| cancel.is_requested(),
+            after_batch: Some(&mut after_batch),
+        };
+        let on_element_done = || {
+            stage.inc(1);
+            cancel.row_done();
+        };
+        let rows = form_factors::compute_planned(mesh, params, paths.as_ref(), plan, &on_element_done);
         let seconds = start.elapsed().as_secs_f64();
+        let resumed = known.map_or(0, PartialRows::done_count);
+        stats.resume = (resume.checkpoint.is_some() || resume.needs_matrix()).then(|| ResumeStats {
+            rows_resumed: resumed,
+            rows_computed: rows.done_count() - resumed,
+            load_seconds,
+            ..Default::default()
+        });
+        if let Some(checkpointer) = checkpointer.as_mut() {
+            // A run long enough for one periodic write keeps its finished rows for the stages after.
+            if cancel.is_requested() || (checkpointer.due() && rows.done_count() > resumed) {
+                checkpointer.write(&rows);
+            }
+            if let Some(e) = checkpointer.error.take() {
+                progress.note(&format!("warning: cannot write the checkpoint: {e}"));
+            }
+            if let Some(r) = stats.resume.as_mut() {
+                r.checkpoint_writes = checkpointer.writes;
+                r.checkpoint_seconds = checkpointer.write_seconds;
+            }
+        }
+        if let Some(signal) = cancel.signal() {
+            return Err(MethodError::Interrupted { signal, checkpoint: resume.checkpoint.clone() });
+        }
+        let ff = &rows.ff;
+        stats.specular_pixels = rows.specular.pixels;
+        stats.specular_rays = rows.specular.rays;
+        stats.extended_nonzeros = rows.specular.entries;
         stats.elements = mesh.elements.len();
         stats.hemicube_resolution_px = params.hemicube_resolution_px;
         stats.form_factor_seconds = seconds;
@@ -250,34 +325,53 @@ impl FullMatrix {
         } else {
             String::new()
         };
+        let resumed_note = if resumed > 0 { format!(" ({resumed} rows resumed)") } else { String::new() };
         stage.finish(&format!(
-            "{} elements at {}², {:.0} hemicubes/s, {} non-zeros ({:.1} MiB){specular_note}",
+            "{} elements at {}², {:.0} hemicubes/s, {} non-zeros ({:.1} MiB){specular_note}{resumed_note}",
             mesh.elements.len(),
             params.hemicube_resolution_px,
             stats.hemicubes_per_second,
             ff.nnz(),
             ff.memory_bytes() as f64 / (1 << 20) as f64
         ));
-        ff
+        Ok(rows)
+    }
+
+    /// Shard `resume.shard`'s rows of the matrix (`solve --shard K/N`), for `resume::merge_parts`.
+    pub fn shard_rows(
+        &self,
+        scene: &SceneDescription,
+        mesh: &Mesh,
+        photons: &RunPhotons,
+        resume: &Resume,
+        progress: &Progress,
+    ) -> Result<(PartialRows, PassOneStats), MethodError> {
+        self.check_memory(scene, mesh)?;
+        let mut stats = PassOneStats { elements: mesh.elements.len(), ..Default::default() };
+        let rows = self.compute_form_factors(scene, mesh, photons, resume, progress, &mut stats)?;
+        Ok((rows, stats))
     }
 
     /// Solves B = E + ρ·F·B over `ff` with this method's solver and adds the direct part, the vertex
     /// averages and the fingerprint.
+    /// `None` when `stop` ended the solve.
     fn solve_matrix(
         &self,
         scene: &SceneDescription,
         mesh: &Mesh,
         ff: &FormFactors,
+        stop: &dyn Fn() -> bool,
         progress: &Progress,
         stats: &mut PassOneStats,
-    ) -> Solution {
+    ) -> Option<Solution> {
         let params = RadiosityParams { solver: self.solver, ..scene.radiosity.clone() };
         let stage = progress.stage("solving", params.max_iterations as u64, "sweeps");
         let start = Instant::now();
-        let solution = solver::solve_solution(mesh, &scene.materials, ff, &params, &mut |iteration, residual| {
+        let mut on_iteration = |iteration: u32, residual: f64| {
             stage.set_position(iteration as u64);
             stage.set_message(format!("residual {residual:.2e}"));
-        });
+        };
+        let solution = solver::solve_solution_until(mesh, &scene.materials, ff, &params, &mut on_iteration, stop)?;
         stats.solve_seconds = start.elapsed().as_secs_f64();
         stats.solver = Some(self.name());
         stats.sweeps = solution.stats.iterations;
@@ -289,13 +383,17 @@ impl FullMatrix {
             stats.final_residual,
             if solution.stats.converged { "" } else { " (not converged: iteration cap)" }
         ));
-        solution
+        Some(solution)
     }
 }
 
 impl PassOneMethod for FullMatrix {
     fn name(&self) -> String {
         self.solver.name().to_string()
+    }
+
+    fn checkpoints(&self) -> bool {
+        true
     }
 
     /// The matrix's bound (`form_factor_bytes_bound`), twice for shooting, which also keeps the
@@ -340,15 +438,55 @@ impl PassOneMethod for FullMatrix {
                 // `check_memory`) would not fit beside them.
                 reuse.form_factors.make_room(form_factor_bytes_bound(&mesh, &scene.radiosity) / 2);
                 self.check_memory(scene, &mesh)?;
-                let ff = Arc::new(self.compute_form_factors(scene, &mesh, photons, progress, &mut stats));
+                let rows = self.compute_form_factors(scene, &mesh, photons, &reuse.resume, progress, &mut stats)?;
+                let ff = Arc::new(rows.ff);
                 if let Some(key) = key {
                     reuse.form_factors.insert(key, ff.clone(), ff.memory_bytes() as u64);
                 }
                 (ff, false)
             }
         };
-        let solution = self.solve_matrix(scene, &mesh, &ff, progress, &mut stats);
-        Ok(PassOne { mesh, solution, stats, reused_form_factors: reused })
+        let resume = &reuse.resume;
+        let cancel = &resume.cancel;
+        let solution = self.solve_matrix(scene, &mesh, &ff, &|| cancel.is_requested(), progress, &mut stats);
+        // From here on nothing is left to save: a signal ends the run at once. One that came after
+        // the solver last looked is handled as if it came during the solve.
+        cancel.exit_at_once(true);
+        match (solution, cancel.signal()) {
+            (Some(solution), None) => Ok(PassOne { mesh, solution, stats, reused_form_factors: reused }),
+            (_, signal) => {
+                if let Some(path) = &resume.checkpoint {
+                    let keys = scene_keys(scene, &mesh);
+                    let mut checkpointer =
+                        Checkpointer::new(path.clone(), keys, resume.shard(), ff.len(), resume.interval);
+                    checkpointer.write_matrix(&ff, &vec![true; ff.len()]);
+                    if let Some(e) = checkpointer.error {
+                        progress.note(&format!("warning: cannot write the checkpoint: {e}"));
+                    }
+                }
+                let signal = signal.unwrap_or(crate::interrupt::SIGINT);
+                Err(MethodError::Interrupted { signal, checkpoint: resume.checkpoint.clone() })
+            }
+        }
+    }
+}
+
+/// The keys a checkpoint or a shard part of this scene's matrix carries.
+pub fn scene_keys(scene: &SceneDescription, mesh: &Mesh) -> SceneKeys {
+    SceneKeys {
+        fingerprint: fingerprint::fingerprint(mesh, &scene.materials),
+        form_factor_key: form_factor_key(mesh, &scene.materials, &scene.radiosity),
+    }
+}
+
+/// The matrix method that computes shard rows and solves merged parts: the scene's method when it
+/// is the stored matrix, else `ShardError::NotMatrix`.
+pub fn matrix_for_shards(scene: &SceneDescription) -> Result<FullMatrix, ShardError> {
+    let method = for_scene(scene);
+    if method.checkpoints() && scene.radiosity.store_form_factors {
+        Ok(FullMatrix { solver: scene.radiosity.solver })
+    } else {
+        Err(ShardError::NotMatrix { scene: scene.path.display().to_string(), method: method.name() })
     }
 }
 

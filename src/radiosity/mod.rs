@@ -13,6 +13,7 @@ pub mod leaf_mesh;
 pub mod matrix;
 pub mod matrix_free;
 pub mod method;
+pub mod resume;
 pub mod solution;
 pub mod solution_file;
 pub mod solver;

@@ -39,4 +39,21 @@ pub struct PassOneStats {
     /// What the hierarchical method did (absent for the other methods).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hierarchy: Option<HierarchyStats>,
+    /// What the checkpoint, shard or merge of the matrix method did (absent for plain runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub resume: Option<ResumeStats>,
+}
+
+/// Rows taken from a checkpoint or merged parts and rows computed by this run, and the checkpoint
+/// writes (`radiosity::resume`).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct ResumeStats {
+    /// Rows copied from the checkpoint or the merged parts (including empty rows of black elements).
+    pub rows_resumed: usize,
+    /// Rows this run finished (including empty rows of black elements).
+    pub rows_computed: usize,
+    /// Reading and checking the checkpoint or the parts.
+    pub load_seconds: f64,
+    pub checkpoint_writes: u32,
+    pub checkpoint_seconds: f64,
 }

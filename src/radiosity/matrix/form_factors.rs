@@ -7,6 +7,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
+use super::PartialRows;
 use crate::mesh::Mesh;
 use crate::radiosity::hemicube::{Hemicube, HemicubeFrame, ItemBuffer};
 use crate::radiosity::specular::{SpecularPaths, SpecularStats};
@@ -295,6 +296,29 @@ impl ElementHierarchy {
 /// so that peak memory is the matrix plus one batch of rows.
 const BATCH_ROWS: usize = 1024;
 
+/// Where a computation of rows starts and how far it goes: rows finished earlier are copied, rows
+/// not selected are left undone, and no row is started once `stop` says so. `RowPlan::all()` computes
+/// every row.
+pub struct RowPlan<'a> {
+    /// Rows finished earlier (a checkpoint, or the merged parts of a sharded run): copied, not
+    /// recomputed. Must have one entry per element.
+    pub known: Option<&'a PartialRows>,
+    /// Whether this run computes row i (every row, or one shard's).
+    pub selected: &'a (dyn Fn(usize) -> bool + Sync),
+    /// Polled before every row: once true, no further row is computed (known rows are still copied).
+    pub stop: &'a (dyn Fn() -> bool + Sync),
+    /// Sees the rows so far (a prefix of the matrix) after every batch, on one thread while the next
+    /// batch is computed: the place to write a checkpoint.
+    pub after_batch: Option<&'a mut (dyn FnMut(&PartialRows) + Send)>,
+}
+
+impl RowPlan<'_> {
+    /// Every row, from scratch, to the end.
+    pub fn all() -> RowPlan<'static> {
+        RowPlan { known: None, selected: &|_| true, stop: &|| false, after_batch: None }
+    }
+}
+
 /// The form-factor matrix of a mesh by one hemicube per element (Cohen and Greenberg 1985):
 /// F_ij = Σ ΔF over the pixels of element i's hemicube where element j is the nearest surface.
 ///
@@ -304,7 +328,7 @@ const BATCH_ROWS: usize = 1024;
 /// over elements (rayon, one item buffer per worker); every row depends only on the inputs, so the
 /// result is the same whatever the thread count. `on_element_done` is called once per element.
 pub fn compute(mesh: &Mesh, params: &RadiosityParams, on_element_done: &(dyn Fn() + Sync)) -> FormFactors {
-    compute_rows(mesh, params, None, on_element_done).0
+    compute_rows(mesh, params, None, RowPlan::all(), on_element_done).ff
 }
 
 /// `compute` plus the extended form factors through specular surfaces (Wallace, Cohen and Greenberg
@@ -321,50 +345,83 @@ pub fn compute_extended(
     specular: &SpecularPaths,
     on_element_done: &(dyn Fn() + Sync),
 ) -> (FormFactors, SpecularStats) {
-    let any = (0..mesh.elements.len()).any(|j| specular.is_specular(j));
-    compute_rows(mesh, params, any.then_some(specular), on_element_done)
+    let rows = compute_planned(mesh, params, Some(specular), RowPlan::all(), on_element_done);
+    (rows.ff, rows.specular)
 }
 
-/// One computed row: entries (plain, then extended), the length of the plain part, the ray cost.
-type ComputedRow = (Vec<(u32, f32)>, usize, SpecularStats);
+/// The rows `plan` asks for, plain (`specular` = `None`) or extended through specular surfaces as in
+/// `compute_extended`. A row is the same bits whether computed here, in another process, or in
+/// pieces over several runs, so a matrix assembled from checkpoints or shards equals `compute`'s.
+pub fn compute_planned(
+    mesh: &Mesh,
+    params: &RadiosityParams,
+    specular: Option<&SpecularPaths>,
+    plan: RowPlan,
+    on_element_done: &(dyn Fn() + Sync),
+) -> PartialRows {
+    let any = specular.filter(|s| (0..mesh.elements.len()).any(|j| s.is_specular(j)));
+    compute_rows(mesh, params, any, plan, on_element_done)
+}
+
+/// One computed row: entries (plain, then extended), the length of the plain part, the ray cost, and
+/// whether it is done.
+type ComputedRow = (Vec<(u32, f32)>, usize, SpecularStats, bool);
 
 fn compute_rows(
     mesh: &Mesh,
     params: &RadiosityParams,
     specular: Option<&SpecularPaths>,
+    mut plan: RowPlan,
     on_element_done: &(dyn Fn() + Sync),
-) -> (FormFactors, SpecularStats) {
+) -> PartialRows {
     let hc = Hemicube::new(params.hemicube_resolution_px);
     let hierarchy = ElementHierarchy::new(mesh);
     let n = mesh.elements.len();
-    let mut ff =
-        FormFactors { row_start: Vec::with_capacity(n + 1), plain_end: Vec::with_capacity(n), ..Default::default() };
-    let mut stats = SpecularStats::default();
-    ff.row_start.push(0);
+    if let Some(known) = plan.known {
+        assert_eq!(known.len(), n, "known rows of this mesh");
+    }
+    let mut rows = PartialRows {
+        ff: FormFactors {
+            row_start: Vec::with_capacity(n + 1),
+            plain_end: Vec::with_capacity(n),
+            ..Default::default()
+        },
+        done: Vec::with_capacity(n),
+        specular: plan.known.map_or_else(SpecularStats::default, |k| k.specular),
+    };
+    rows.ff.row_start.push(0);
     let pool = BufferPool { hc: &hc, free: Mutex::new(Vec::new()) };
+    let (known, selected, stop) = (plan.known, plan.selected, plan.stop);
     let compute_batch = |batch: std::ops::Range<usize>| -> Vec<ComputedRow> {
         batch
             .into_par_iter()
             .map_init(
                 || pool.take(),
                 |buffers, i| {
-                    let buffers = buffers.get();
-                    let mut row = Vec::new();
-                    let mut row_stats = SpecularStats::default();
-                    let mut plain = 0;
-                    if needs_row(mesh, i) {
+                    let computed = if let Some(known) = known.filter(|k| k.done[i]) {
+                        let (row, plain) = known.row_entries(i);
+                        (row, plain, SpecularStats::default(), true)
+                    } else if !needs_row(mesh, i) {
+                        (Vec::new(), 0, SpecularStats::default(), true)
+                    } else if selected(i) && !stop() {
+                        let buffers = buffers.get();
+                        let mut row = Vec::new();
+                        let mut row_stats = SpecularStats::default();
                         hierarchy.element_row(mesh, params, &hc, buffers, i, &mut row);
                         if let Some(specular) = specular {
                             row.retain(|&(j, _)| !specular.is_pure_specular(j as usize));
                         }
-                        plain = row.len();
+                        let plain = row.len();
                         if let Some(specular) = specular {
                             // The item buffer still holds this hemicube's pixels.
                             row_stats = specular.extend_row(&hc, buffers, params.seed, i, &mut row);
                         }
-                    }
+                        (row, plain, row_stats, true)
+                    } else {
+                        (Vec::new(), 0, SpecularStats::default(), false)
+                    };
                     on_element_done();
-                    (row, plain, row_stats)
+                    computed
                 },
             )
             .collect()
@@ -372,24 +429,32 @@ fn compute_rows(
     // Batch k + 1 is computed while batch k is appended (serially, on one thread), so that no core
     // waits for the append.
     let mut pending = Vec::new();
+    let mut append = |rows: &mut PartialRows, pending: Vec<ComputedRow>| {
+        append_rows(rows, pending);
+        if let Some(after_batch) = plan.after_batch.as_deref_mut() {
+            after_batch(rows);
+        }
+    };
     for batch_start in (0..n).step_by(BATCH_ROWS) {
         let batch = batch_start..(batch_start + BATCH_ROWS).min(n);
-        let (rows, ()) = rayon::join(|| compute_batch(batch), || append_rows(&mut ff, &mut stats, pending));
-        pending = rows;
+        let (computed, ()) = rayon::join(|| compute_batch(batch), || append(&mut rows, pending));
+        pending = computed;
     }
-    append_rows(&mut ff, &mut stats, pending);
-    ff.column.shrink_to_fit();
-    ff.value.shrink_to_fit();
-    (ff, stats)
+    append(&mut rows, pending);
+    rows.ff.column.shrink_to_fit();
+    rows.ff.value.shrink_to_fit();
+    rows
 }
 
 /// Appends computed rows to the matrix (dropping zeros) and adds up their ray statistics.
-fn append_rows(ff: &mut FormFactors, stats: &mut SpecularStats, rows: Vec<ComputedRow>) {
-    let entries: usize = rows.iter().map(|(row, _, _)| row.len()).sum();
+fn append_rows(rows: &mut PartialRows, computed: Vec<ComputedRow>) {
+    let ff = &mut rows.ff;
+    let entries: usize = computed.iter().map(|(row, _, _, _)| row.len()).sum();
     ff.column.reserve(entries);
     ff.value.reserve(entries);
-    for (row, plain, row_stats) in rows {
-        *stats += row_stats;
+    for (row, plain, row_stats, done) in computed {
+        rows.specular += row_stats;
+        rows.done.push(done);
         for (k, (c, v)) in row.into_iter().enumerate() {
             if k == plain {
                 ff.plain_end.push(ff.column.len());

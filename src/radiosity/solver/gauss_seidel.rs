@@ -58,17 +58,18 @@ pub fn gauss_seidel_sweep(
 }
 
 /// Solves B = E + ρ·F·B by SOR sweeps from B = E with ω = `params.relaxation` (see
-/// `sweep_until_converged` for the stopping rule).
+/// `sweep_until_converged` for the stopping rule; abandoned when `stop` says so).
 pub fn solve(
     ff: &FormFactors,
     reflectance: &[DVec3],
     emission: &[DVec3],
     params: &RadiosityParams,
     on_iteration: &mut dyn FnMut(u32, f64),
-) -> (Vec<DVec3>, SolveStats) {
+    stop: &dyn Fn() -> bool,
+) -> Option<(Vec<DVec3>, SolveStats)> {
     // Finding F_ii reads every column index, so split it over rows.
     let diagonal: Vec<f32> = (0..ff.len()).into_par_iter().map(|i| row_diagonal(ff, i)).collect();
-    sweep_until_converged(emission, params, on_iteration, |exitance| {
+    sweep_until_converged(emission, params, on_iteration, stop, |exitance| {
         gauss_seidel_sweep(ff, &diagonal, reflectance, emission, params.relaxation, exitance)
     })
 }

@@ -49,9 +49,10 @@ pub fn solve(
     emission: &[DVec3],
     params: &RadiosityParams,
     on_iteration: &mut dyn FnMut(u32, f64),
-) -> (Vec<DVec3>, SolveStats) {
+    stop: &dyn Fn() -> bool,
+) -> Option<(Vec<DVec3>, SolveStats)> {
     let mut scratch = vec![DVec3::ZERO; emission.len()];
-    sweep_until_converged(emission, params, on_iteration, |exitance| {
+    sweep_until_converged(emission, params, on_iteration, stop, |exitance| {
         let change = scratch
             .par_iter_mut()
             .enumerate()

@@ -78,16 +78,21 @@ impl SweepChange {
 /// Runs sweeps until the largest relative change of one, `SweepChange::relative`, is below
 /// `params.tolerance`, or `params.max_iterations` sweeps. `sweep(exitance)` performs one sweep in
 /// place. `on_iteration(k, measure)` sees every sweep; a non-finite measure (a diverging system) stops
-/// unconverged and is not recorded.
+/// unconverged and is not recorded. `stop` is polled before every sweep: once true, the solve is
+/// abandoned (`None`).
 pub(crate) fn sweep_until_converged(
     start: &[DVec3],
     params: &RadiosityParams,
     on_iteration: &mut dyn FnMut(u32, f64),
+    stop: &dyn Fn() -> bool,
     mut sweep: impl FnMut(&mut Vec<DVec3>) -> SweepChange,
-) -> (Vec<DVec3>, SolveStats) {
+) -> Option<(Vec<DVec3>, SolveStats)> {
     let mut stats = SolveStats { solver: params.solver, iterations: 0, residual_history: Vec::new(), converged: false };
     let mut exitance = start.to_vec();
     while stats.iterations < params.max_iterations {
+        if stop() {
+            return None;
+        }
         let change = sweep(&mut exitance);
         stats.iterations += 1;
         let measure = change.relative();
@@ -101,7 +106,7 @@ pub(crate) fn sweep_until_converged(
             break;
         }
     }
-    (exitance, stats)
+    Some((exitance, stats))
 }
 
 /// Solves B = E + ρ·F·B with the method of `params.solver` and returns B as f32 (see `solve_f64`).
@@ -139,6 +144,21 @@ pub fn solve_f64(
     params: &RadiosityParams,
     on_iteration: &mut dyn FnMut(u32, f64),
 ) -> (Vec<DVec3>, SolveStats) {
+    solve_f64_until(ff, reflectance, emission, area, params, on_iteration, &|| false)
+        .expect("a solve that is never stopped finishes")
+}
+
+/// `solve_f64`, abandoned (`None`) as soon as `stop` returns true; it is polled before every sweep
+/// or shot.
+pub fn solve_f64_until(
+    ff: &FormFactors,
+    reflectance: &[Vec3],
+    emission: &[Vec3],
+    area: &[f32],
+    params: &RadiosityParams,
+    on_iteration: &mut dyn FnMut(u32, f64),
+    stop: &dyn Fn() -> bool,
+) -> Option<(Vec<DVec3>, SolveStats)> {
     let n = ff.len();
     assert!(reflectance.len() == n && emission.len() == n && area.len() == n, "one value per element");
     match params.solver {
@@ -146,12 +166,12 @@ pub fn solve_f64(
             let reflectance: Vec<DVec3> = reflectance.iter().map(|r| r.as_dvec3()).collect();
             let emission: Vec<DVec3> = emission.iter().map(|e| e.as_dvec3()).collect();
             if params.solver == SolverKind::Jacobi {
-                jacobi::solve(ff, &reflectance, &emission, params, on_iteration)
+                jacobi::solve(ff, &reflectance, &emission, params, on_iteration, stop)
             } else {
-                gauss_seidel::solve(ff, &reflectance, &emission, params, on_iteration)
+                gauss_seidel::solve(ff, &reflectance, &emission, params, on_iteration, stop)
             }
         }
-        SolverKind::Progressive => shooting::solve(ff, reflectance, emission, area, params, on_iteration),
+        SolverKind::Progressive => shooting::solve(ff, reflectance, emission, area, params, on_iteration, stop),
     }
 }
 
@@ -166,11 +186,25 @@ pub fn solve_solution(
     params: &RadiosityParams,
     on_iteration: &mut dyn FnMut(u32, f64),
 ) -> Solution {
+    solve_solution_until(mesh, materials, ff, params, on_iteration, &|| false)
+        .expect("a solve that is never stopped finishes")
+}
+
+/// `solve_solution`, abandoned (`None`) as soon as `stop` returns true (polled before every sweep or
+/// shot).
+pub fn solve_solution_until(
+    mesh: &Mesh,
+    materials: &[Material],
+    ff: &FormFactors,
+    params: &RadiosityParams,
+    on_iteration: &mut dyn FnMut(u32, f64),
+    stop: &dyn Fn() -> bool,
+) -> Option<Solution> {
     let e = &mesh.elements;
     assert_eq!(ff.len(), e.len(), "one form-factor row per element");
-    let (exitance, stats) = solve_f64(ff, &e.reflectance, &e.emission, &e.area, params, on_iteration);
+    let (exitance, stats) = solve_f64_until(ff, &e.reflectance, &e.emission, &e.area, params, on_iteration, stop)?;
     let direct = direct_exitance(ff, &e.reflectance, &e.emission);
-    Solution::from_element_values(mesh, materials, &exitance, &direct, stats)
+    Some(Solution::from_element_values(mesh, materials, &exitance, &direct, stats))
 }
 
 #[cfg(test)]

@@ -308,7 +308,8 @@ impl Shooter {
 }
 
 /// Solves B = E + ρ·F·B over a stored matrix by shooting (`Shooter`) until `ShotCount` stops it; the
-/// exitance is returned without the ambient term. `on_shot(k, unshot_fraction)` sees every shot.
+/// exitance is returned without the ambient term. `on_shot(k, unshot_fraction)` sees every shot;
+/// `stop` is polled before every shot, and once true the solve is abandoned (`None`).
 pub fn solve(
     ff: &FormFactors,
     reflectance: &[Vec3],
@@ -316,10 +317,14 @@ pub fn solve(
     area: &[f32],
     params: &RadiosityParams,
     on_shot: &mut dyn FnMut(u32, f64),
-) -> (Vec<DVec3>, SolveStats) {
+    stop: &dyn Fn() -> bool,
+) -> Option<(Vec<DVec3>, SolveStats)> {
     let mut shooter = Shooter::new(ff, reflectance, emission, area);
     let mut count = ShotCount::new(params, ff.len(), shooter.unshot_fraction());
     while count.goes_on() {
+        if stop() {
+            return None;
+        }
         if shooter.step().is_none() {
             count.nothing_left();
             break;
@@ -328,5 +333,5 @@ pub fn solve(
             break;
         }
     }
-    (shooter.into_exitance(), count.into_stats())
+    Some((shooter.into_exitance(), count.into_stats()))
 }

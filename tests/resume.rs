@@ -1,0 +1,200 @@
+//! Resumable and sharded pass one: an interrupted solve resumes from its checkpoint to the bytes of an
+//! uninterrupted one, a damaged or stale checkpoint is ignored with a warning, and the parts of a
+//! sharded solve merge to the bytes of a single-machine solve, with every shard required once.
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use common::radray;
+use radray::interrupt::{Cancel, SIGINT, SIGTERM};
+use radray::progress::Progress;
+use radray::radiosity::matrix::rows_file::{self, RowsHeader, RowsKind};
+use radray::radiosity::resume::{checkpoint_path, Resume};
+use radray::run::{Job, Outcome, Runner, Work};
+use radray::scene::{Overrides, Quality};
+
+fn cornell_box() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box.toml")
+}
+
+/// A solve of the Cornell box at the preview quality (937 elements, four receiver groups).
+fn preview_solve(output: &Path) -> Job {
+    Job {
+        scene: cornell_box(),
+        overrides: Overrides { quality: Some(Quality::Preview), ..Default::default() },
+        work: Work::Solve { output: output.to_path_buf() },
+    }
+}
+
+fn preview_args<'a>(output: &'a str, more: &[&'a str]) -> Vec<&'a str> {
+    let scene = Box::leak(cornell_box().display().to_string().into_boxed_str());
+    let mut args = vec!["solve", scene, "--quality", "preview", "-o", output];
+    args.extend_from_slice(more);
+    args
+}
+
+fn uninterrupted_solution(dir: &Path) -> Vec<u8> {
+    let path = dir.join("reference.radsol");
+    let mut outcome = Outcome::default();
+    Runner::single().run(&preview_solve(&path), &Progress::hidden(), &mut outcome).unwrap();
+    std::fs::read(path).unwrap()
+}
+
+#[test]
+fn a_solve_interrupted_after_300_rows_resumes_to_the_bytes_of_an_uninterrupted_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("cornell.radsol");
+    let checkpoint = checkpoint_path(&output);
+    // Zero interval: a checkpoint after every batch of rows, as a long run writes them every 30 s.
+    let interrupted = Resume {
+        checkpoint: Some(checkpoint.clone()),
+        interval: Duration::ZERO,
+        cancel: Cancel::after_rows(300, SIGTERM),
+        ..Default::default()
+    };
+    let mut outcome = Outcome::default();
+    let failure = Runner::resumable(interrupted).run(&preview_solve(&output), &Progress::hidden(), &mut outcome);
+    let failure = failure.expect_err("the run is cancelled after 300 rows");
+    assert_eq!(failure.exit_code, 143, "{failure}");
+    assert!(failure.to_string().contains("cornell.radsol.partial"), "{failure}");
+    assert!(!output.exists(), "no solution from an interrupted run");
+    let (header, rows) = rows_file::read(&checkpoint).unwrap();
+    assert_eq!(header.kind, RowsKind::Checkpoint);
+    assert!(!rows.is_complete(), "interrupted part-way: {} of {} rows", rows.done_count(), rows.len());
+
+    let resumed = Resume { checkpoint: Some(checkpoint.clone()), interval: Duration::ZERO, ..Default::default() };
+    let mut outcome = Outcome::default();
+    Runner::resumable(resumed).run(&preview_solve(&output), &Progress::hidden(), &mut outcome).unwrap();
+    let stats = outcome.stats.pass_one.resume.expect("resume statistics");
+    assert!(stats.rows_resumed >= 300, "{stats:?}");
+    assert!(stats.rows_computed > 0, "{stats:?}");
+    assert_eq!(stats.rows_resumed + stats.rows_computed, 937);
+    assert!(!checkpoint.exists(), "the checkpoint is removed once the solution is written");
+    assert!(std::fs::read(&output).unwrap() == uninterrupted_solution(dir.path()), "resumed bytes differ");
+}
+
+#[test]
+fn a_damaged_checkpoint_is_ignored_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = uninterrupted_solution(dir.path());
+    let output = dir.path().join("cornell.radsol");
+    let checkpoint = checkpoint_path(&output);
+    // A checkpoint cut short: the first half of a real one.
+    let resume = Resume {
+        checkpoint: Some(checkpoint.clone()),
+        interval: Duration::ZERO,
+        cancel: Cancel::after_rows(500, SIGINT),
+        ..Default::default()
+    };
+    let failure = Runner::resumable(resume).run(&preview_solve(&output), &Progress::hidden(), &mut Outcome::default());
+    assert_eq!(failure.expect_err("cancelled").exit_code, 130);
+    let bytes = std::fs::read(&checkpoint).unwrap();
+    std::fs::write(&checkpoint, &bytes[..bytes.len() / 2]).unwrap();
+
+    let out = radray(&preview_args(output.to_str().unwrap(), &[]));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("warning: ignoring the checkpoint") && stderr.contains("damaged"), "{stderr}");
+    assert!(std::fs::read(&output).unwrap() == reference, "bytes differ after ignoring the checkpoint");
+}
+
+#[test]
+fn a_checkpoint_of_another_scene_is_ignored_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("cornell.radsol");
+    let checkpoint = checkpoint_path(&output);
+    let other =
+        RowsHeader { kind: RowsKind::Checkpoint, fingerprint: 1, form_factor_key: 2, shard_index: 0, shard_count: 1 };
+    let rows = radray::radiosity::matrix::PartialRows {
+        ff: radray::radiosity::matrix::FormFactors::from_rows(vec![vec![(1, 0.5)], vec![]]),
+        done: vec![true, true],
+        ..Default::default()
+    };
+    rows_file::write(&checkpoint, &other, &rows, 2).unwrap();
+    let out = radray(&preview_args(output.to_str().unwrap(), &[]));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("made for another scene"), "{stderr}");
+    assert!(std::fs::read(&output).unwrap() == uninterrupted_solution(dir.path()));
+}
+
+#[test]
+fn three_shards_of_the_cornell_box_merge_to_the_bytes_of_a_single_solve() {
+    let dir = tempfile::tempdir().unwrap();
+    let part = |k: usize| dir.path().join(format!("part.{k}")).display().to_string();
+    for k in 0..3 {
+        let shard = format!("{k}/3");
+        let out = radray(&preview_args(&part(k), &["--shard", &shard]));
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let merged = dir.path().join("merged.radsol").display().to_string();
+    // Parts in any order.
+    let out = radray(&preview_args(&merged, &["--merge", &part(2), &part(0), &part(1)]));
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read(&merged).unwrap() == uninterrupted_solution(dir.path()), "merged bytes differ");
+
+    let refused = |args: &[&str], expected: &str| {
+        let target = dir.path().join("refused.radsol").display().to_string();
+        let mut more = vec!["--merge"];
+        more.extend_from_slice(args);
+        let out = radray(&preview_args(&target, &more));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(expected), "expected `{expected}` in: {stderr}");
+        assert!(!Path::new(&target).exists(), "nothing written");
+    };
+    refused(&[&part(0), &part(1)], "shard(s) [2] of 3 missing");
+    refused(&[&part(0), &part(1), &part(1), &part(2)], "shard 1 of 3 given twice");
+    refused(&[&merged], "not a radray row-block file");
+}
+
+#[test]
+fn sigint_to_the_binary_saves_a_checkpoint_exits_130_and_the_rerun_gives_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    // The Cornell box meshed coarser (50 mm elements) with 128² hemicubes on one thread: a few
+    // seconds of rows, so that the signal lands among them.
+    let scene = dir.path().join("cornell.toml");
+    let text = std::fs::read_to_string(cornell_box()).unwrap();
+    let obj = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_original/scene.obj");
+    let text = text
+        .replace("hemicube_resolution = 256", "hemicube_resolution = 128")
+        .replace("max_element_edge = 25.0", "max_element_edge = 50.0")
+        .replace("obj = \"cornell_original/scene.obj\"", &format!("obj = {:?}", obj.display().to_string()));
+    std::fs::write(&scene, text).unwrap();
+    let run = |output: &Path| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_radray"));
+        command.args(["-v", "--threads", "1", "solve"]).arg(&scene).arg("-o").arg(output);
+        command
+    };
+    let output = dir.path().join("int.radsol");
+    let mut child = run(&output).stderr(Stdio::piped()).spawn().unwrap();
+    // The handlers are in place once meshing is reported; the rows follow at once.
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    while stderr.read_line(&mut line).unwrap() > 0 && !line.contains("meshing") {
+        line.clear();
+    }
+    assert!(line.contains("meshing"), "{line}");
+    std::thread::sleep(Duration::from_millis(700));
+    let killed = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    let (_, rows) = rows_file::read(&checkpoint_path(&output)).unwrap();
+    assert!(!rows.is_complete(), "stopped during the rows");
+
+    let stats = dir.path().join("stats.json");
+    let resumed = run(&output).arg("--stats").arg(&stats).output().unwrap();
+    let log = String::from_utf8_lossy(&resumed.stderr);
+    assert!(resumed.status.success(), "{log}");
+    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(stats["resume"]["rows_resumed"].as_u64(), Some(rows.done_count() as u64), "{stats}");
+    let reference = dir.path().join("reference.radsol");
+    let fresh = run(&reference).output().unwrap();
+    assert!(fresh.status.success());
+    assert!(std::fs::read(&output).unwrap() == std::fs::read(&reference).unwrap(), "resumed bytes differ");
+}
