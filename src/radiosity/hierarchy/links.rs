@@ -173,7 +173,9 @@ pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
 ///   `form_factor::element_to_element`, plus partial visibility, so a significant link in a penumbra
 ///   is refined).
 /// - Far links with a cluster end: F = V · P_S P_R / (π d² A_R) (Sillion 1995), ΔF = the bound
-///   `cluster_form_factor_bound` times max(V, 1/(N+1)): the approximation itself is the error.
+///   `cluster_form_factor_bound` times max(V, 1/(N+1)): the approximation itself is the error;
+///   plus `push_spread` (a cluster receiver only partly reached by the source), not capped.
+/// - Near links kept with an estimated F also add `near_push_spread`.
 /// - Near links (`is_near`): ΔF = `near_spread`. When the link's error with that bound is above
 ///   `threshold_w` it is about to be split and F is not estimated (NaN, so that a kept one is caught);
 ///   otherwise F = `visibility::sampled_form_factor`, and `None` when no sample pair faces each other.
