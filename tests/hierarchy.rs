@@ -434,3 +434,86 @@ fn hanging_nodes_take_their_edges_interpolated_value() {
     println!("{hanging} hanging nodes");
     assert!(hanging > 0, "the preview solution of the Cornell box has subdivided neighbours");
 }
+
+/// Two 4 × 2.6 × 4 m rooms side by side along z, separated by a 0.2 m wall made, as in
+/// scenes/rooms/, of two one-sided faces that each face into their own room (z = 4 faces the lit
+/// room, z = 4.2 the dark one). Every face is a `grid` × `grid` field of quads, so the cluster tree
+/// holds clusters with pieces of both rooms and of both wall faces. The lamp is a 1 × 1 m ceiling
+/// panel in the lit room only. Returns the scene and, per surface, whether it lies in the dark room.
+fn two_rooms_through_a_wall(grid: u32) -> (SceneDescription, Vec<bool>) {
+    let (w, h, wall_z, thickness) = (4.0f32, 2.6f32, 4.0f32, 0.2f32);
+    let mut surfaces = Vec::new();
+    let mut dark = Vec::new();
+    // (origin, u, v) with u × v pointing into the room; rho, Ke.
+    let mut face = |o: Vec3, u: Vec3, v: Vec3, rho: f32, in_dark: bool| {
+        let n = grid as f32;
+        for j in 0..grid {
+            for i in 0..grid {
+                let p = |a: u32, b: u32| o + u * (a as f32 / n) + v * (b as f32 / n);
+                surfaces.push((vec![p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1)], rho, 0.0));
+                dark.push(in_dark);
+            }
+        }
+    };
+    for (z0, z1, in_dark) in [(0.0, wall_z, false), (wall_z + thickness, 2.0 * wall_z + thickness, true)] {
+        let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+        let d = z1 - z0;
+        face(Vec3::new(0.0, 0.0, z0), z * d, x * w, 0.5, in_dark); // floor, +y
+        face(Vec3::new(0.0, h, z0), x * w, z * d, 0.75, in_dark); // ceiling, −y
+        face(Vec3::new(0.0, 0.0, z0), y * h, z * d, 0.7, in_dark); // x = 0, +x
+        face(Vec3::new(w, 0.0, z0), z * d, y * h, 0.7, in_dark); // x = w, −x
+        face(Vec3::new(0.0, 0.0, z0), x * w, y * h, 0.7, in_dark); // z = z0, +z
+        face(Vec3::new(0.0, 0.0, z1), y * h, x * w, 0.7, in_dark); // z = z1, −z
+    }
+    // The lamp, 1 mm below the lit room's ceiling, facing down, 1.5 m from the wall.
+    let y = h - 1e-3;
+    let (x0, z0) = (1.5, wall_z - 2.5);
+    surfaces.push((
+        vec![
+            Vec3::new(x0, y, z0),
+            Vec3::new(x0 + 1.0, y, z0),
+            Vec3::new(x0 + 1.0, y, z0 + 1.0),
+            Vec3::new(x0, y, z0 + 1.0),
+        ],
+        0.0,
+        10.0,
+    ));
+    dark.push(false);
+    (scene_of(surfaces), dark)
+}
+
+/// No light path joins the two rooms, so every leaf of the dark room must stay exactly black: light
+/// there can only have leaked through the wall (a cluster link whose visibility was assumed, or whose
+/// irradiance was pushed to children behind the wall). Exact zero, not a tolerance: ray visibility
+/// through a closed wall is 0 whatever the sampling, so a correct solver adds exactly nothing.
+///
+/// Ignored: still missed. The receiver-side visibility term (`links::push_spread`) cut the leak at
+/// the preview threshold from 0.151 W to 0.062 W (lit room 82.6 W; links 26k -> 40k). What remains
+/// are cluster receivers holding both rooms whose links stay just under the threshold, or whose 8
+/// rays happened not to sample the unreached part (q = 1). Exact zero needs the issue's "refine where
+/// visibility is partial" independent of the power threshold for cluster receivers, or a cluster
+/// push that distributes by each child's own visibility.
+#[test]
+#[ignore = "0.062 W of 82.6 W still leaks at the preview threshold (0.151 W before push_spread); see doc comment"]
+fn light_does_not_leak_through_a_wall_into_a_dark_room() {
+    let (scene, dark) = two_rooms_through_a_wall(4);
+    for params in [HierarchyParams::preview(), HierarchyParams::default()] {
+        let solution = hierarchy::solve(&scene, &params, &mut |_| {}).unwrap();
+        let (mut leaked_w, mut lit_w, mut worst) = (0.0f64, 0.0f64, 0.0f32);
+        for i in 0..solution.leaf_area.len() {
+            let power = solution.leaf_exitance[i].max_element() as f64 * solution.leaf_area[i] as f64;
+            if dark[solution.leaf_surface[i] as usize] {
+                leaked_w += power;
+                worst = worst.max(solution.leaf_exitance[i].max_element());
+            } else {
+                lit_w += power;
+            }
+        }
+        println!(
+            "threshold {}: dark room {leaked_w:.4} W (worst leaf {worst:.4} W/m²), lit room {lit_w:.1} W; {:?}",
+            params.error_threshold, solution.stats
+        );
+        assert!(lit_w > 0.0);
+        assert_eq!(leaked_w, 0.0, "{leaked_w} W leaked into the dark room (lit room: {lit_w} W)");
+    }
+}

@@ -6,7 +6,7 @@ use super::form_factor::{
     cluster_form_factor, cluster_form_factor_bound, element_projected_area, element_to_element, projected_area,
 };
 use super::nodes::Nodes;
-use super::visibility::{sampled_form_factor, visible_fraction, VisibilityContext};
+use super::visibility::{link_visibility, sampled_form_factor, Visibility, VisibilityContext};
 
 /// A link while refining: receiver, source, form factor and its error spread.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -173,7 +173,9 @@ pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
 ///   `form_factor::element_to_element`, plus partial visibility, so a significant link in a penumbra
 ///   is refined).
 /// - Far links with a cluster end: F = V · P_S P_R / (π d² A_R) (Sillion 1995), ΔF = the bound
-///   `cluster_form_factor_bound` times max(V, 1/(N+1)): the approximation itself is the error.
+///   `cluster_form_factor_bound` times max(V, 1/(N+1)): the approximation itself is the error;
+///   plus `push_spread` (a cluster receiver only partly reached by the source), not capped.
+/// - Near links kept with an estimated F also add `near_push_spread`.
 /// - Near links (`is_near`): ΔF = `near_spread`. When the link's error with that bound is above
 ///   `threshold_w` it is about to be split and F is not estimated (NaN, so that a kept one is caught);
 ///   otherwise F = `visibility::sampled_form_factor`, and `None` when no sample pair faces each other.
@@ -191,7 +193,7 @@ pub fn estimate(
         if !(mean > 0.0 || error > 0.0) {
             return None;
         }
-        let v = visible_fraction(ctx, nodes, receiver, source) as f64;
+        let v = link_visibility(ctx, nodes, receiver, source).visible as f64;
         if v == 0.0 {
             return None;
         }
@@ -205,7 +207,8 @@ pub fn estimate(
         if refinement_error(nodes, &record) > threshold_w {
             return Some((f32::NAN, spread));
         }
-        return near_form_factor(nodes, ctx, receiver, source).map(|f| (f, spread));
+        let f = near_form_factor(nodes, ctx, receiver, source)?;
+        return Some((f, spread + near_push_spread(nodes, ctx, receiver, source, f)));
     }
     let (cr, cs) = (nodes.centre[receiver], nodes.centre[source]);
     let offset = cr - cs;
@@ -225,12 +228,59 @@ pub fn estimate(
     if !(bound > 0.0) {
         return None;
     }
-    let v = visible_fraction(ctx, nodes, receiver, source) as f64;
+    let visibility = link_visibility(ctx, nodes, receiver, source);
+    let v = visibility.visible as f64;
     if v == 0.0 && bound < 1.0 {
         return None;
     }
-    let spread = bound * v.max(1.0 / (ctx.rays as f64 + 1.0));
-    Some(((f * v) as f32, (spread as f32).min(spread_cap)))
+    let spread = ((bound * v.max(1.0 / (ctx.rays as f64 + 1.0))) as f32).min(spread_cap);
+    Some(((f * v) as f32, spread + push_spread(nodes, receiver, f, visibility) as f32))
+}
+
+/// The error of pushing a link's irradiance uniformly to everything below its receiver when the
+/// receiver is only partly reached (ΔF, same unit as F; `unoccluded` is the link's form factor
+/// before visibility, V = `Visibility::visible`, q = `Visibility::receiving`):
+///
+/// - cluster receiver, 0 < q < 1: ΔF = F·max(1, (1 − q)/q), F = V·F_unoccluded. The reached part
+///   (area fraction q) should get irradiance G/q and the rest nothing, while the push gives every
+///   part G = F·B_S: the unreached part's exitance is wrong by ρ·G and the reached part's by
+///   ρ·G·(1 − q)/q. Applying the exitance criterion ρ·B_S·ΔF ≤ ε·Ē to the worse part, not to the
+///   area mean, is what keeps light from leaking through a wall whose two faces share a cluster:
+///   the far face faces away from (or is hidden from) the source, and its error is not diluted by
+///   the lit face's area. 0 when q = 1 (every sampled part is reached);
+/// - element receiver: ΔF = 2·F_unoccluded·min(V, 1 − V), the partial-visibility term of element
+///   links (a penumbra across the element: blur, not a leak).
+///
+/// Measured with the link's own rays, it is added to the estimator's spread without the parent's
+/// cap, so a partly reached receiver is split while the error matters.
+pub fn push_spread(nodes: &Nodes, receiver: usize, unoccluded: f64, visibility: Visibility) -> f64 {
+    let (v, q) = (visibility.visible as f64, visibility.receiving as f64);
+    if !nodes.is_cluster[receiver] {
+        return 2.0 * unoccluded * v.min(1.0 - v);
+    }
+    if !(q > 0.0 && q < 1.0) {
+        return 0.0;
+    }
+    unoccluded * v * ((1.0 - q) / q).max(1.0)
+}
+
+/// `push_spread` of a near link whose form factor `form_factor` is estimated (F after visibility):
+/// 0 for an element receiver (the near bound already covers it), else measured with the link's rays.
+pub fn near_push_spread(
+    nodes: &Nodes,
+    ctx: &VisibilityContext,
+    receiver: usize,
+    source: usize,
+    form_factor: f32,
+) -> f32 {
+    if !nodes.is_cluster[receiver] || !(form_factor > 0.0) {
+        return 0.0;
+    }
+    let visibility = link_visibility(ctx, nodes, receiver, source);
+    if !(visibility.visible > 0.0) {
+        return 0.0;
+    }
+    push_spread(nodes, receiver, form_factor as f64 / visibility.visible as f64, visibility) as f32
 }
 
 /// Near links whose ends hold at most this many leaf-element pairs are integrated pair by pair.
@@ -264,7 +314,7 @@ pub fn near_form_factor(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize,
     if !(sum > 0.0) {
         return None;
     }
-    let v = visible_fraction(ctx, nodes, receiver, source) as f64;
+    let v = link_visibility(ctx, nodes, receiver, source).visible as f64;
     Some((v * sum / nodes.area[receiver] as f64).min(1.0) as f32)
 }
 

@@ -7,8 +7,8 @@
 use rayon::prelude::*;
 
 use super::links::{
-    estimate, link_error_power, near_form_factor, refinement_error, source_variation_power, LinkRecord, Links,
-    LINK_BYTES,
+    estimate, link_error_power, near_form_factor, near_push_spread, refinement_error, source_variation_power,
+    LinkRecord, Links, LINK_BYTES,
 };
 use super::nodes::{Nodes, NODE_BYTES};
 use super::visibility::VisibilityContext;
@@ -203,8 +203,12 @@ pub fn refine(
 /// gets its form factor now, and is dropped if its ends cannot exchange light.
 fn keep(nodes: &Nodes, ctx: &VisibilityContext, mut link: LinkRecord, kept: &mut Vec<LinkRecord>) {
     if link.form_factor.is_nan() {
-        match near_form_factor(nodes, ctx, link.receiver as usize, link.source as usize) {
-            Some(f) => link.form_factor = f,
+        let (r, s) = (link.receiver as usize, link.source as usize);
+        match near_form_factor(nodes, ctx, r, s) {
+            Some(f) => {
+                link.form_factor = f;
+                link.spread += near_push_spread(nodes, ctx, r, s, f);
+            }
             None => return,
         }
     }
