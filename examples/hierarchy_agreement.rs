@@ -135,11 +135,11 @@ fn main() -> ExitCode {
         }
     }
     let mut share = vec![vec![0.0f64; surfaces]; nodes.len()];
-    for n in 0..nodes.len() {
+    for (n, row) in share.iter_mut().enumerate() {
         for l in leaves(&nodes, n) {
             let input = nodes.input[l] as usize;
             if !inputs.back[input] {
-                share[n][inputs.surface[input] as usize] += nodes.area[l] as f64;
+                row[inputs.surface[input] as usize] += nodes.area[l] as f64;
             }
         }
     }
