@@ -234,8 +234,9 @@ proptest! {
                                  own in proptest::collection::vec(0.0f64..10.0, 64)) {
         let (nodes, root) = tiny_tree(&levels);
         let own_irradiance: Vec<DVec3> = (0..nodes.len()).map(|n| DVec3::new(own[n % 64], own[(n * 7 + 3) % 64], 1.0)).collect();
+        let own_pushed: Vec<gather::Irradiance> = own_irradiance.iter().map(|&g| gather::Irradiance::uniform(g)).collect();
         let mut exitance = vec![DVec3::ZERO; nodes.len()];
-        let total = gather::push_pull(&nodes, root, &own_irradiance, &mut exitance);
+        let total = gather::push_pull(&nodes, root, &own_pushed, &mut exitance);
         let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n)).collect();
         let pushed: DVec3 = leaves.iter().map(|&n| total[n] * nodes.area[n] as f64).sum();
         let gathered: DVec3 = (0..nodes.len()).map(|n| own_irradiance[n] * nodes.area[n] as f64).sum();
@@ -244,6 +245,72 @@ proptest! {
         let root_power = exitance[root] * nodes.area[root] as f64;
         prop_assert!((leaf_power - root_power).abs().max_element() <= 1e-9 * root_power.max_element());
     }
+}
+
+proptest! {
+    /// Oriented irradiance on clusters (a cluster receiver's links, see `gather::gather`) is pushed to
+    /// each element by its own normal and still conserves power: Σ_leaves A·G_total = Σ_nodes
+    /// A·mean(G_own), on the Cornell box's cluster tree (blocks with faces in four horizontal
+    /// directions) with random uniform and oriented parts. The bins and the elements' bin weights are
+    /// f32 (rounding 6e-8 each, summed over at most 32 clusters on a path): 32 × f32::EPSILON relative.
+    #[test]
+    fn oriented_push_conserves_power(own in proptest::collection::vec(0.0f64..10.0, 7 * 64)) {
+        let scene = load_scene("cornell_box.toml");
+        let (nodes, root, _, _) = clusters::build(&scene).unwrap();
+        let root = root as usize;
+        let pick = |n: usize, k: usize| own[(n * 7 + k) % own.len()];
+        let own_pushed: Vec<gather::Irradiance> = (0..nodes.len())
+            .map(|n| gather::Irradiance {
+                uniform: DVec3::splat(pick(n, 0)),
+                oriented: if nodes.is_cluster[n] { std::array::from_fn(|b| DVec3::splat(pick(n, b + 1))) } else { [DVec3::ZERO; 6] },
+            })
+            .collect();
+        let mut exitance = vec![DVec3::ZERO; nodes.len()];
+        let total = gather::push_pull(&nodes, root, &own_pushed, &mut exitance);
+        let pushed: f64 = (0..nodes.len()).filter(|&n| nodes.is_leaf(n)).map(|n| total[n].x * nodes.area[n] as f64).sum();
+        let gathered: f64 =
+            (0..nodes.len()).map(|n| own_pushed[n].mean(nodes.area[n], &nodes.projected_bins[n]).x * nodes.area[n] as f64).sum();
+        prop_assert!((pushed - gathered).abs() <= 32.0 * f32::EPSILON as f64 * gathered, "{pushed} vs {gathered}");
+    }
+}
+
+/// A cluster receiver's far link lights only the members that face the source: a cluster of a floor
+/// triangle (facing +y) and a wall triangle (facing +x) under a source straight above gets all of
+/// the link's power on the floor and none on the wall.
+#[test]
+fn a_cluster_receiver_pushes_a_far_link_to_the_members_facing_it() {
+    let floor = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 0.0)];
+    let wall = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, 1.0)];
+    let scene = scene_of(vec![(floor, 0.5, 0.0), (wall, 0.5, 0.0)]);
+    let (mut nodes, root, inputs, _) = clusters::build(&scene).unwrap();
+    let root = root as usize;
+    assert!(nodes.is_cluster[root]);
+    // A source node straight above: an element far away, facing down.
+    let source = nodes.push_element(
+        [Vec3::new(0.0, 100.0, 0.0), Vec3::new(1.0, 100.0, 0.0), Vec3::new(0.0, 100.0, 1.0)],
+        0,
+        0,
+        Vec3::ZERO,
+        Vec3::ONE,
+    ) as usize;
+    nodes.centre[source] = nodes.centre[root] + Vec3::Y * 100.0;
+    let links = radray::radiosity::hierarchy::links::Links::from_records(
+        nodes.len(),
+        vec![radray::radiosity::hierarchy::links::LinkRecord {
+            receiver: root as u32,
+            source: source as u32,
+            form_factor: 1e-3,
+            spread: 0.0,
+        }],
+    );
+    let own: Vec<gather::Irradiance> =
+        (0..nodes.len()).map(|n| gather::gather(&nodes, &links, n, &nodes.exitance)).collect();
+    let mut exitance = nodes.exitance.clone();
+    let total = gather::push_pull(&nodes, root, &own, &mut exitance);
+    let (floor, wall) = (inputs.node[0] as usize, inputs.node[1] as usize);
+    let power = links.form_factor[0] as f64 * nodes.area[root] as f64;
+    assert!((total[floor].x * nodes.area[floor] as f64 - power).abs() <= 1e-9 * power, "{total:?}");
+    assert_eq!(total[wall], DVec3::ZERO);
 }
 
 /// Refinement at a fixed exitance never raises the summed error estimate Σ ρ_R A_R B_S ΔF: a child
@@ -297,6 +364,14 @@ fn refinement_never_makes_the_error_estimate_grow() {
 /// not close with ε (1e-2: 445%, 3e-2: 599%, at 0.7 M and 0.2 M links), so it is not the refinement
 /// tolerance: see the report of this session for what was ruled out (pass-one form-factor sums,
 /// near-link estimators, edge quadrature).
+///
+/// Session 5 (`examples/hierarchy_agreement`, 256² hemicubes): on the empty box, where every link is
+/// element to element and the estimator agrees with a 768-point quadrature within 0.01% and the
+/// link visibility with 256 rays within 0.1%, the surfaces are still 1.5–3.7% darker (ceiling worst).
+/// On this box, with cluster links forbidden, the walls stay 4–6% and block sides 5–10% darker, so
+/// the bulk of the gap is not the cluster links. What the cluster links did cause, one irradiance
+/// pushed to members facing different ways, is fixed (oriented push, `gather::gather`): the short
+/// block's side facing the tall block went from 1.47–1.97 of the matrix to 1.08–1.24.
 #[test]
 #[ignore = "the hierarchy is 4-17% darker than the full matrix where indirect light dominates (see doc comment)"]
 fn hierarchy_agrees_with_the_full_matrix_solver_on_the_cornell_box() {
@@ -516,4 +591,101 @@ fn light_does_not_leak_through_a_wall_into_a_dark_room() {
         assert!(lit_w > 0.0);
         assert_eq!(leaked_w, 0.0, "{leaked_w} W leaked into the dark room (lit room: {lit_w} W)");
     }
+}
+
+/// Two clusters over the fan triangles of `p1` and `p2`, each triangle cut `levels` times, and a ray
+/// accelerator over all their triangles (nothing else in the scene). Returns (nodes, receiver, source,
+/// accel).
+fn two_clusters(p1: &[Vec3], p2: &[Vec3], levels: u32) -> (Nodes, usize, usize, radray::accel::Accel) {
+    let mut nodes = Nodes::default();
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    let mut ends = [0usize; 2];
+    for (k, p) in [p1, p2].into_iter().enumerate() {
+        let cluster = nodes.push_cluster_slot() as usize;
+        let first = nodes.len() as u32;
+        let pieces: Vec<[Vec3; 3]> = fan(p).into_iter().flat_map(|t| subdivided(t, levels)).collect();
+        for t in &pieces {
+            nodes.push_element(*t, 0, 0, Vec3::splat(0.5), Vec3::ZERO);
+            let base = positions.len() as u32;
+            positions.extend_from_slice(t);
+            triangles.push([base, base + 1, base + 2]);
+        }
+        nodes.set_cluster_children(cluster, first, u8::try_from(pieces.len()).unwrap());
+        ends[k] = cluster;
+    }
+    let accel = radray::accel::Accel::build(&positions, &triangles);
+    (nodes, ends[0], ends[1], accel)
+}
+
+/// The near-link leaf-pair estimator (`links::near_form_factor` with at most 64 leaf pairs: the element
+/// estimator summed over the pairs, times visibility) against the rectangle cases of
+/// `tests/data/polygon_to_polygon.json`, F12 with each rectangle a cluster of its two triangles.
+/// Stated tolerance: the element estimator's 1% (its near pairs use the 48-point rule); measured
+/// worst 0.16% (pp_perp_edge1_w2_h1).
+#[test]
+fn near_link_leaf_pair_estimator_matches_polygon_to_polygon_cases() {
+    use radray::radiosity::hierarchy::links::near_form_factor;
+    use radray::radiosity::hierarchy::visibility::VisibilityContext;
+    let data = load_json("polygon_to_polygon.json");
+    let mut checked = 0;
+    for case in data["cases"].as_array().unwrap() {
+        let g = &case["geometry"];
+        let (p1, p2) = (polygon(&g["polygon1"]["vertices"]), polygon(&g["polygon2"]["vertices"]));
+        if p1.len() != 4 || p2.len() != 4 {
+            continue;
+        }
+        let want = case["expected"]["F12"].as_f64().unwrap();
+        let (nodes, r, s, accel) = two_clusters(&p1, &p2, 0);
+        let ctx = VisibilityContext { accel: &accel, rays: 8, offset: 1e-5, seed: 0 };
+        let f = near_form_factor(&nodes, &ctx, r, s).unwrap_or(0.0) as f64;
+        let e = (f - want) / want;
+        println!("{} leaf pairs: F12 {f:.5} (exact {want:.5}), rel. error {e:+.2e}", case["id"]);
+        assert!(e.abs() <= 0.01, "{}: {e}", case["id"]);
+        checked += 1;
+    }
+    assert_eq!(checked, 9);
+}
+
+/// The near-link ray estimator (`visibility::sampled_form_factor`, Wallace et al.'s disk estimator,
+/// used by `links::near_form_factor` above 64 leaf pairs) against every polygon-to-polygon case, with
+/// the default 8 visibility rays (16 point pairs), averaged over 64 seeds: its bias must be within 4
+/// standard errors of that mean.
+///
+/// Ignored: it is biased low where the ends are close, because each sample's kernel is divided by
+/// π d² + A_S/N and the disk term dominates near the ends' contact. Measured (bias relative, standard
+/// error): parallel squares at separation 0.5 −4.3% (2.6%), at 1 and 2 within 1.2%; perpendicular
+/// rectangles sharing an edge −18% to −42% (4–6%); disks r 1 → 2 at separation 0.5 −30% (3.7%); other
+/// disks within 1.6%. This is suspect (a) of issue 10 for near cluster links, still to fix.
+#[test]
+#[ignore = "the ray-traced near-link estimator is biased low by 18-42% on touching or close cases (see doc comment)"]
+fn near_link_ray_estimator_is_unbiased_on_polygon_to_polygon_cases() {
+    use radray::radiosity::hierarchy::links::near_form_factor;
+    use radray::radiosity::hierarchy::visibility::VisibilityContext;
+    let data = load_json("polygon_to_polygon.json");
+    let mut worst = 0.0f64;
+    for case in data["cases"].as_array().unwrap() {
+        let g = &case["geometry"];
+        let (p1, p2) = (polygon(&g["polygon1"]["vertices"]), polygon(&g["polygon2"]["vertices"]));
+        let want = case["expected"]["F12"].as_f64().unwrap();
+        // Enough leaves for more than 64 pairs: rectangles cut into 32 triangles, disks as 62.
+        let (nodes, r, s, accel) = two_clusters(&p1, &p2, if p1.len() == 4 { 2 } else { 0 });
+        let seeds = 64;
+        let samples: Vec<f64> = (0..seeds)
+            .map(|seed| {
+                let ctx = VisibilityContext { accel: &accel, rays: 8, offset: 1e-5, seed };
+                near_form_factor(&nodes, &ctx, r, s).unwrap_or(0.0) as f64
+            })
+            .collect();
+        let mean = samples.iter().sum::<f64>() / seeds as f64;
+        let var = samples.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
+        let se = (var / seeds as f64).sqrt();
+        println!(
+            "{} rays: mean F12 {mean:.5} (exact {want:.5}), bias {:+.2e}, standard error {:.1e} (relative)",
+            case["id"],
+            (mean - want) / want,
+            se / want
+        );
+        worst = worst.max((mean - want).abs() / se);
+    }
+    assert!(worst <= 4.0, "worst bias at {worst:.1} standard errors");
 }

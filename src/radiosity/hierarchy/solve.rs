@@ -3,9 +3,7 @@
 //! this sweep's values), pushes its irradiance to its children, and pulls their exitance back up as
 //! soon as they are done.
 
-use glam::DVec3;
-
-use super::gather::{gather, leaf_exitance, pulled};
+use super::gather::{gather, leaf_exitance, pulled, Irradiance};
 use super::links::Links;
 use super::nodes::{mean_channel, Nodes};
 
@@ -19,7 +17,8 @@ pub struct SweepChange {
 
 /// One in-place sweep over the tree below `root` with relaxation factor ω:
 ///
-/// G_n = G_parent + Σ_{S linked to n} F_nS B_S;  leaves: B ← B + ω(E + ρG − B);
+/// G_n = G_parent + Σ_{S linked to n} F_nS B_S (per orientation below a cluster, see
+/// `gather::gather`; an element takes its own normal's share);  leaves: B ← B + ω(E + ρG − B);
 /// inner nodes: B = Σ_c A_c B_c / Σ_c A_c (after their children).
 ///
 /// Serial and in a fixed order, so the result does not depend on threads. Updates `exitance`,
@@ -27,7 +26,7 @@ pub struct SweepChange {
 pub fn sweep(nodes: &mut Nodes, links: &Links, root: usize, relaxation: f64) -> SweepChange {
     let mut change = SweepChange::default();
     // Explicit stack: (node, irradiance from above, children visited?).
-    let mut stack: Vec<(usize, DVec3, bool)> = vec![(root, DVec3::ZERO, false)];
+    let mut stack: Vec<(usize, Irradiance, bool)> = vec![(root, Irradiance::default(), false)];
     while let Some((n, down, expanded)) = stack.pop() {
         if expanded {
             let b = pulled(nodes, n, &nodes.exitance);
@@ -35,12 +34,22 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, root: usize, relaxation: f64) -> 
             nodes.exitance_mean[n] = mean_channel(nodes.exitance[n]);
             continue;
         }
-        let own = gather(links, n, &nodes.exitance);
-        nodes.gathered[n] = own;
-        let g = down + own;
+        let own = gather(nodes, links, n, &nodes.exitance);
+        nodes.gathered[n] = own.mean(nodes.area[n], &nodes.projected_bins[n]);
+        let mut g = down.plus(&own);
+        if !nodes.is_cluster[n] {
+            // An element: every point below it has its normal.
+            g = Irradiance::uniform(g.on_element(nodes.normal[n]));
+        }
         if nodes.is_leaf(n) {
             let old = nodes.exitance[n];
-            let new = leaf_exitance(nodes.emission[n].as_dvec3(), nodes.reflectance[n].as_dvec3(), g, old, relaxation);
+            let new = leaf_exitance(
+                nodes.emission[n].as_dvec3(),
+                nodes.reflectance[n].as_dvec3(),
+                g.uniform,
+                old,
+                relaxation,
+            );
             nodes.exitance[n] = new;
             nodes.exitance_mean[n] = mean_channel(new);
             change.max_change = change.max_change.max((new - old).abs().max_element());
