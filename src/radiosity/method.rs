@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use super::fingerprint;
 use super::hierarchical::Hierarchical;
-use super::hierarchy::HierarchyError;
+use super::hierarchy::{HierarchyError, LinkStructure};
 use super::matrix::{form_factors, FormFactors};
 use super::matrix_free;
 use super::solution::Solution;
@@ -44,18 +44,43 @@ pub struct PassOne {
 }
 
 /// Work that later jobs of a batch may reuse, keyed by what it depends on
-/// (`fingerprint::form_factor_key`). `Reuse::none()` keeps nothing, for a single run.
+/// (`fingerprint::form_factor_key`, `hierarchical::link_key`). `Reuse::none()` keeps nothing, for a
+/// single run.
 #[derive(Debug, Default)]
 pub struct Reuse {
     keep: bool,
     /// Form factors of earlier scenes, least recently used out beyond the budget: matrices are large.
     form_factors: Lru<Arc<FormFactors>>,
+    /// Refined hierarchies (nodes, links, form factors) of earlier scenes, under the same budget.
+    hierarchy_links: Lru<Arc<LinkStructure>>,
 }
 
 impl Reuse {
     /// Keeps nothing: a single run frees its matrix as soon as it is solved.
     pub fn none() -> Self {
-        Reuse { keep: false, form_factors: Lru::default() }
+        Reuse { keep: false, form_factors: Lru::default(), hierarchy_links: Lru::default() }
+    }
+
+    /// True when this keeps work for later jobs (a batch).
+    pub fn keeps(&self) -> bool {
+        self.keep
+    }
+
+    /// The refined hierarchy an earlier job left under `key`, if still kept.
+    pub fn hierarchy_links(&mut self, key: u64) -> Option<Arc<LinkStructure>> {
+        self.hierarchy_links.get(key).cloned()
+    }
+
+    /// Keeps a refined hierarchy for later jobs (nothing when this keeps nothing), charging its
+    /// bytes to the budget both caches share (kept matrices are evicted first). Returns whether it
+    /// was kept.
+    pub fn keep_hierarchy_links(&mut self, key: u64, links: Arc<LinkStructure>) -> bool {
+        let bytes = links.memory_bytes();
+        if !self.keep {
+            return false;
+        }
+        self.form_factors.make_room(self.hierarchy_links.used_bytes() + bytes);
+        self.hierarchy_links.insert(key, links, bytes)
     }
 
     /// Keeps scenes' form factors for the jobs after them, within the default budget.
@@ -65,7 +90,7 @@ impl Reuse {
 
     /// Keeps scenes' form factors for the jobs after them, at most `budget_bytes` of them.
     pub fn across_jobs_within(budget_bytes: u64) -> Self {
-        Reuse { keep: true, form_factors: Lru::new(budget_bytes) }
+        Reuse { keep: true, form_factors: Lru::new(budget_bytes), hierarchy_links: Lru::new(budget_bytes) }
     }
 }
 
@@ -342,7 +367,10 @@ impl PassOneMethod for FullMatrix {
                 self.check_memory(scene, &mesh)?;
                 let ff = Arc::new(self.compute_form_factors(scene, &mesh, photons, progress, &mut stats));
                 if let Some(key) = key {
-                    reuse.form_factors.insert(key, ff.clone(), ff.memory_bytes() as u64);
+                    // The budget is shared with kept hierarchies (none in a matrix-only batch).
+                    let bytes = ff.memory_bytes() as u64;
+                    reuse.hierarchy_links.make_room(reuse.form_factors.used_bytes() + bytes);
+                    reuse.form_factors.insert(key, ff.clone(), bytes);
                 }
                 (ff, false)
             }
