@@ -314,6 +314,7 @@ materials = {{ light = {{ ke = [4.0, 8.0, 20.0] }} }}
     let jobs = manifest["jobs"].as_array().unwrap();
     assert_eq!(jobs[1]["reused_solution"], true, "a new view reuses the solution and its leaf mesh");
     assert_eq!(jobs[2]["reused_solution"], false, "new emission is a new solution");
+    assert_eq!(jobs[2]["reused_form_factors"], true, "a materials-only change re-solves from the kept links");
     assert!(dir.path().join("b.png").is_file() && dir.path().join("c.png").is_file());
 }
 
