@@ -16,6 +16,27 @@ fn solve(s: &SceneDescription, kept: Option<&LinkStructure>) -> (HierarchicalSol
     hierarchy::solve_reusing(s, Arc::default(), &HierarchyParams::preview(), kept, &mut |_| {}).expect("solve")
 }
 
+/// A fresh solve of the Cornell box changed by `change`, and a re-solve of it from the links of the
+/// unchanged box; with the changed scene.
+fn fresh_and_reused(
+    change: fn(&SceneDescription) -> SceneDescription,
+) -> (SceneDescription, HierarchicalSolution, HierarchicalSolution) {
+    let s = cornell();
+    let (_, kept) = solve(&s, None);
+    let changed = change(&s);
+    let (fresh, _) = solve(&changed, None);
+    let (reused, _) = solve(&changed, Some(&kept));
+    (changed, fresh, reused)
+}
+
+fn brighter(s: &SceneDescription) -> SceneDescription {
+    variants(s).0
+}
+
+fn blue(s: &SceneDescription) -> SceneDescription {
+    variants(s).1
+}
+
 /// The Cornell box with emission doubled, and with the red wall turned blue.
 fn variants(s: &SceneDescription) -> (SceneDescription, SceneDescription) {
     let mut brighter = s.clone();
@@ -30,11 +51,7 @@ fn variants(s: &SceneDescription) -> (SceneDescription, SceneDescription) {
 
 #[test]
 fn a_re_solve_whose_materials_scale_every_error_alike_estimates_no_link_and_equals_the_fresh_solve() {
-    let s = cornell();
-    let (_, kept) = solve(&s, None);
-    let (brighter, _) = variants(&s);
-    let (fresh, _) = solve(&brighter, None);
-    let (reused, _) = solve(&brighter, Some(&kept));
+    let (_, fresh, reused) = fresh_and_reused(brighter);
     // Doubling every emission doubles every link error and the threshold (ε × the mean emitted
     // exitance) alike: a fresh solve makes the same links, and the re-solve splits none.
     assert!(fresh.stats.links_estimated > 100_000, "{:?}", fresh.stats);
@@ -55,11 +72,7 @@ fn a_re_solve_whose_materials_scale_every_error_alike_estimates_no_link_and_equa
 
 #[test]
 fn a_colour_change_re_solves_from_the_kept_links_with_far_fewer_form_factor_evaluations() {
-    let s = cornell();
-    let (_, kept) = solve(&s, None);
-    let (_, blue) = variants(&s);
-    let (fresh, _) = solve(&blue, None);
-    let (reused, _) = solve(&blue, Some(&kept));
+    let (blue, fresh, reused) = fresh_and_reused(blue);
     // Evaluations counted, not time: a fresh solve estimates every link it tries (≈ 265k here).
     assert!(
         reused.stats.links_estimated * 4 < fresh.stats.links_estimated,
@@ -85,11 +98,7 @@ fn a_colour_change_re_solves_from_the_kept_links_with_far_fewer_form_factor_eval
 #[test]
 #[ignore = "coarser links are darker (tests/hierarchy.rs agreement test): one block side differs by 14%"]
 fn a_colour_change_re_solve_agrees_with_a_fresh_solve_per_surface() {
-    let s = cornell();
-    let (_, kept) = solve(&s, None);
-    let (_, blue) = variants(&s);
-    let (fresh, _) = solve(&blue, None);
-    let (reused, _) = solve(&blue, Some(&kept));
+    let (blue, fresh, reused) = fresh_and_reused(blue);
     let n = blue.surfaces.len();
     let (a, b) = (fresh.surface_mean_exitance(n), reused.surface_mean_exitance(n));
     let emits = |k: usize| blue.materials[blue.surfaces[k].material as usize].is_emitter();
