@@ -520,7 +520,11 @@ fn hierarchical_and_matrix_pass_one_see_the_same_texture_means_on_the_textured_b
     }
     assert!(textured >= 3, "{textured} textured surfaces");
     // Exitance: with the texture means the hierarchy must sit closer to the matrix on every textured
-    // surface than the hierarchy with Kd did (the bug this fixes: Kd 1 × map_Kd became 0.98).
+    // surface than the hierarchy with Kd did (the bug this fixes: Kd 1 × map_Kd became 0.98). Measured
+    // (default ε, largest channel relative to the matrix): 2.3–35% on 16 of the 17 textured surfaces
+    // and 72% on a dim one (0.027), against 98–1457% with Kd. What remains is the hierarchy's own gap
+    // to the matrix (darker where indirect light dominates; the ignored agreement test in
+    // tests/hierarchy.rs), not the texture means, which the first half checks exactly.
     let b_matrix = surface_means_of(&matrix_mesh, n, |e| matrix.element_exitance[e].as_dvec3());
     let b_leaves = surface_means_of(&leaf_mesh, n, |e| hierarchical.element_exitance[e].as_dvec3());
     let kd_only = hierarchy::solve(&s, &radray::radiosity::hierarchical::hierarchy_params(&s), &mut |_| {})
@@ -531,6 +535,13 @@ fn hierarchical_and_matrix_pass_one_see_the_same_texture_means_on_the_textured_b
             continue;
         }
         let gap = |b: glam::DVec3| (b - b_matrix[k]).abs().max_element() / b_matrix[k].max_element();
+        assert!(
+            gap(b_leaves[k]) < gap(kd_only[k]),
+            "surface {k}: matrix {:?}, hierarchy {:?}, with Kd {:?}",
+            b_matrix[k],
+            b_leaves[k],
+            kd_only[k]
+        );
         println!(
             "surface {k}: matrix {:.4?} hierarchy {:.4?} ({:.1}%) with Kd {:.4?} ({:.1}%)",
             b_matrix[k],
