@@ -8,8 +8,13 @@ lines and with Kd capped at 0.8: pass one on its own), a scene TOML (two-sided, 
 the default preset, method = "auto"), then runs `radray solve` and `radray render` and writes
 WORK_DIR/sponza_bench.json and a Markdown table on stdout.
 
+--textured renders the scene as it is instead: the OBJ, the MTL and the textures folder linked
+unchanged (textured pass one: every element or hierarchy leaf reflects its texture mean). The
+warnings radray prints (missing textures, clamped albedos) are saved in WORK_DIR/*.stderr.
+
 usage: docs/sponza_bench.py SPONZA_DIR WORK_DIR [--radray target/release/radray] [--timeout-s 1800]
-       [--method auto|hierarchical|matrix] [--quality preview|default|high] [--skip-render]
+       [--method auto|hierarchical|matrix] [--quality preview|default|high] [--skip-render] [--textured]
+       [--skip-solve]
 """
 
 import argparse
@@ -38,7 +43,7 @@ def capped_mtl(text: str) -> str:
 
 
 SCENE_TOML = """# Crytek Sponza (Frank Meinl, Crytek; CC BY 3.0), the GPU-Raytracer arrangement (roof plane, two
-# icosphere lights). Made by docs/sponza_bench.py: MTL without map_ lines, Kd capped at {cap}.
+# icosphere lights). Made by docs/sponza_bench.py: {materials}.
 quality = "{quality}"
 
 [camera]
@@ -69,6 +74,8 @@ def main():
     ap.add_argument("--method", default="auto")
     ap.add_argument("--quality", default="default")
     ap.add_argument("--skip-render", action="store_true")
+    ap.add_argument("--textured", action="store_true", help="the MTL and textures as they are")
+    ap.add_argument("--skip-solve", action="store_true", help="only the whole-process render")
     args = ap.parse_args()
 
     obj = args.sponza_dir / "scene.obj"
@@ -77,27 +84,37 @@ def main():
         sys.exit(f"{args.sponza_dir}: expected scene.obj and scene.mtl")
     work = args.work_dir
     work.mkdir(parents=True, exist_ok=True)
-    link = work / "scene.obj"
-    if link.exists() or link.is_symlink():
-        link.unlink()
-    link.symlink_to(obj.resolve())
-    (work / "scene.mtl").write_text(capped_mtl(mtl.read_text(errors="replace")))
+    linked = [("scene.obj", obj)]
+    if args.textured:
+        linked += [("scene.mtl", mtl), ("textures", args.sponza_dir / "textures")]
+        materials = "the MTL and textures unchanged (textured)"
+    else:
+        (work / "scene.mtl").write_text(capped_mtl(mtl.read_text(errors="replace")))
+        materials = f"MTL without map_ lines, Kd capped at {KD_CAP}"
+    for name, target in linked:
+        link = work / name
+        if link.exists() or link.is_symlink():
+            link.unlink()
+        link.symlink_to(target.resolve())
     scene = work / "sponza.toml"
-    scene.write_text(SCENE_TOML.format(cap=KD_CAP, quality=args.quality, method=args.method))
+    scene.write_text(SCENE_TOML.format(materials=materials, quality=args.quality, method=args.method))
     radray = str(Path(args.radray).resolve())
 
-    results = {"scene": str(scene), "method": args.method, "quality": args.quality}
-    results["solve"] = run_timed(
-        [radray, "-v", "solve", str(scene), "-o", str(work / "sponza.radsol"), "--stats", str(work / "solve.json")],
-        args.timeout_s,
-    )
-    if (work / "solve.json").is_file():
+    results = {"scene": str(scene), "method": args.method, "quality": args.quality, "textured": args.textured}
+    if not args.skip_solve:
+        results["solve"] = run_timed(
+            [radray, "-v", "solve", str(scene), "-o", str(work / "sponza.radsol"), "--stats", str(work / "solve.json")],
+            args.timeout_s,
+            work / "solve.stderr",
+        )
+    if (work / "solve.json").is_file() and not args.skip_solve:
         results["solve_stats"] = json.loads((work / "solve.json").read_text())
     if not args.skip_render:
         results["render"] = run_timed(
             [radray, "-v", "render", str(scene), "-o", str(work / "sponza.png"), "-o", str(work / "sponza.exr"),
              "--width", "640", "--height", "360", "--stats", str(work / "render.json")],
             args.timeout_s,
+            work / "render.stderr",
         )
         if (work / "render.json").is_file():
             results["render_stats"] = json.loads((work / "render.json").read_text())

@@ -10,7 +10,8 @@ import time
 from pathlib import Path
 
 
-def run_timed(cmd, timeout_s):
+def run_timed(cmd, timeout_s, stderr_path=None):
+    """Runs `cmd`; with `stderr_path`, its whole stderr (warnings, progress log) is also saved there."""
     start = time.time()
     p = subprocess.Popen(["/usr/bin/time", "-v", *cmd], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                          text=True, start_new_session=True)
@@ -32,6 +33,8 @@ def run_timed(cmd, timeout_s):
         m = re.search(rf"{re.escape(name)}: ([^\n]+)", err)
         return float(m.group(1)) if m else None
 
+    if stderr_path is not None:
+        Path(stderr_path).write_text(err)
     rss_kb = field("Maximum resident set size (kbytes)")
     return {
         "command": " ".join(str(c) for c in cmd),

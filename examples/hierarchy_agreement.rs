@@ -15,7 +15,7 @@ use radray::radiosity::hierarchy::form_factor::element_to_element;
 use radray::radiosity::hierarchy::links::{admissible, is_near, Links, EXACT_NEAR_PAIRS};
 use radray::radiosity::hierarchy::nodes::{mean_channel, Nodes};
 use radray::radiosity::hierarchy::refine::{refine, RefineSettings};
-use radray::radiosity::hierarchy::visibility::{visible_fraction, VisibilityContext};
+use radray::radiosity::hierarchy::visibility::{link_visibility, VisibilityContext};
 use radray::radiosity::hierarchy::{clusters, solve as hsolve, HierarchyParams};
 use radray::radiosity::{form_factors, solver};
 
@@ -258,8 +258,8 @@ fn main() -> ExitCode {
             let (r, s) = (l.receiver as usize, l.source as usize);
             let (f, _) = element_to_element(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
             let w = nodes.area[r] as f64 * b_mean[s] * f;
-            let v = visible_fraction(&ctx, &nodes, r, s) as f64;
-            let v_fine = visible_fraction(&fine_ctx, &nodes, r, s) as f64;
+            let v = link_visibility(&ctx, &nodes, r, s).visible as f64;
+            let v_fine = link_visibility(&fine_ctx, &nodes, r, s).visible as f64;
             (inputs.surface[nodes.input[r] as usize] as usize, w, w * v, w * v_fine)
         })
         .collect();

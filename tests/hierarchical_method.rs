@@ -289,6 +289,7 @@ fn a_batch_reuses_a_hierarchical_solution_for_a_new_view() {
     let jobs = manifest["jobs"].as_array().unwrap();
     assert_eq!(jobs[1]["reused_solution"], true, "a new view reuses the solution and its leaf mesh");
     assert_eq!(jobs[2]["reused_solution"], false, "new emission is a new solution");
+    assert_eq!(jobs[2]["reused_form_factors"], true, "a materials-only change re-solves from the kept links");
     assert!(dir.path().join("b.png").is_file() && dir.path().join("c.png").is_file());
 }
 

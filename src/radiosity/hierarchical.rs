@@ -92,6 +92,18 @@ pub fn geometry_key(scene: &SceneDescription, params: &HierarchyParams) -> u64 {
     h.finish()
 }
 
+/// What a kept hierarchy (`hierarchy::LinkStructure`: nodes, links, form factors) depends on: the
+/// geometry key, and with cut-outs the texture digest (cut-out triangles do not occlude, so the maps
+/// decide visibility). A batch job with the same key re-solves from the kept links.
+pub fn link_key(scene: &SceneDescription, params: &HierarchyParams, textures: &SceneTextures) -> u64 {
+    let mut h = Fnv1a64::default();
+    h.write_u64(geometry_key(scene, params));
+    if textures.has_cut_outs() {
+        h.write_u64(textures.digest());
+    }
+    h.finish()
+}
+
 /// Identifies a hierarchical solution's scene: the geometry key and every material's Kd, Ke, Ks, Ni
 /// and transmittance (and the texture digest of a textured scene). A materials-only change keeps the
 /// geometry key and changes this.
@@ -248,7 +260,7 @@ impl PassOneMethod for Hierarchical {
         &self,
         scene: &SceneDescription,
         mesh: Mesh,
-        _reuse: &mut Reuse,
+        reuse: &mut Reuse,
         _photons: &RunPhotons,
         progress: &Progress,
     ) -> Result<PassOne, MethodError> {
@@ -257,32 +269,46 @@ impl PassOneMethod for Hierarchical {
         let stage = progress.stage("hierarchy", params.refinement_passes as u64, "passes");
         let start = Instant::now();
         let mut memory_bytes = 0usize;
-        let solved = hierarchy::solve(scene, &params, &mut |p| match p {
-            HierarchyProgress::Refining { pass, round, links, nodes } => {
-                memory_bytes = nodes * NODE_BYTES + links * LINK_BYTES;
-                stage.set_position(pass.saturating_sub(1) as u64);
-                stage.set_message(format!(
-                    "pass {pass} refining, round {round}: {nodes} nodes, {links} links, {:.0} MiB",
-                    memory_bytes as f64 / (1 << 20) as f64
-                ));
-            }
-            HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
-                let relative = if max_exitance > 0.0 { max_change / max_exitance } else { 0.0 };
-                stage.set_message(format!(
-                    "pass {pass} sweep {sweep}: change {relative:.2e}, {:.0} MiB",
-                    memory_bytes as f64 / (1 << 20) as f64
-                ));
-            }
-        })
-        .map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?;
+        // Only a batch keeps hierarchies, so only a batch needs their key.
+        let key = reuse.keeps().then(|| link_key(scene, &params, &mesh.textures));
+        let kept = key.and_then(|key| reuse.hierarchy_links(key));
+        let solved =
+            hierarchy::solve_reusing(scene, mesh.textures.clone(), &params, kept.as_deref(), &mut |p| match p {
+                HierarchyProgress::Refining { pass, round, links, nodes } => {
+                    memory_bytes = nodes * NODE_BYTES + links * LINK_BYTES;
+                    stage.set_position(pass.saturating_sub(1) as u64);
+                    stage.set_message(format!(
+                        "pass {pass} refining, round {round}: {nodes} nodes, {links} links, {:.0} MiB",
+                        memory_bytes as f64 / (1 << 20) as f64
+                    ));
+                }
+                HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
+                    let relative = if max_exitance > 0.0 { max_change / max_exitance } else { 0.0 };
+                    stage.set_message(format!(
+                        "pass {pass} sweep {sweep}: change {relative:.2e}, {:.0} MiB",
+                        memory_bytes as f64 / (1 << 20) as f64
+                    ));
+                }
+            })
+            .map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?;
+        let (solved, structure) = solved;
+        let reused = kept.is_some();
+        drop(kept);
+        // Kept for later jobs, or freed now (before the leaf mesh and its direct part are built).
+        match key {
+            Some(key) => _ = reuse.keep_hierarchy_links(key, Arc::new(structure)),
+            None => drop(structure),
+        }
         let solve_seconds = start.elapsed().as_secs_f64();
         let h = &solved.stats;
         stage.finish(&format!(
-            "{} input triangles, {} clusters → {} elements, {} links, {} passes, {} sweeps, peak {:.1} MiB{}",
+            "{} input triangles, {} clusters → {} elements, {} links ({} estimated{}), {} passes, {} sweeps, peak {:.1} MiB{}",
             h.input_triangles,
             h.clusters,
             h.elements,
             h.links,
+            h.links_estimated,
+            if reused { ", the rest kept from an earlier job" } else { "" },
             h.refinement_passes,
             h.sweeps,
             h.peak_bytes as f64 / (1 << 20) as f64,
@@ -320,6 +346,6 @@ impl PassOneMethod for Hierarchical {
             hierarchy: Some(h.clone()),
             ..Default::default()
         };
-        Ok(PassOne { mesh: leaf_mesh, solution, stats, reused_form_factors: false })
+        Ok(PassOne { mesh: leaf_mesh, solution, stats, reused_form_factors: reused })
     }
 }

@@ -8,8 +8,10 @@
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
+use super::hierarchy::texels::SurfaceTexels;
 use crate::material::SceneTextures;
 use crate::mesh::{surface_uv, Elements, Mesh, NONE};
 use crate::scene::SceneDescription;
@@ -74,10 +76,20 @@ fn locate(geometry: &LeafGeometry, candidates: &[u32], p: Vec3) -> Option<BackVe
 }
 
 /// Builds the pass-two mesh of `geometry` (see module docs): element i is leaf i with its scene
-/// surface's material (Kd and emission as the hierarchy used them); mesh surface s is scene surface
-/// s's front and `surfaces + s` its back; uv comes from the scene surface at each vertex.
+/// surface's material and the reflectance and emission the hierarchy used for it (its texture means,
+/// `SurfaceTexels::element_materials`, so pass two's texture ratio divides by the same albedo); mesh
+/// surface s is scene surface s's front and `surfaces + s` its back; uv comes from the scene surface
+/// at each vertex.
 pub fn build(scene: &SceneDescription, geometry: &LeafGeometry, textures: Arc<SceneTextures>) -> LeafMeshBuild {
     let surfaces = scene.surfaces.len() as u32;
+    let texels = SurfaceTexels::new(scene, textures.clone());
+    let materials: Vec<(Vec3, Vec3)> = (0..geometry.triangles.len())
+        .into_par_iter()
+        .map(|leaf| {
+            let corners = geometry.triangles[leaf].map(|v| geometry.positions[v as usize]);
+            texels.element_materials(geometry.surface[leaf], corners).solved()
+        })
+        .collect();
     let mut mesh = Mesh { positions: geometry.positions.clone(), textures, ..Default::default() };
     let e: &mut Elements = &mut mesh.elements;
     for (leaf, tri) in geometry.triangles.iter().enumerate() {
@@ -85,15 +97,15 @@ pub fn build(scene: &SceneDescription, geometry: &LeafGeometry, textures: Arc<Sc
         let cross = (p[1] - p[0]).cross(p[2] - p[0]);
         let s = geometry.surface[leaf];
         let material = scene.surfaces[s as usize].material;
-        let m = &scene.materials[material as usize];
+        let (reflectance, emission) = materials[leaf];
         e.corners.push([tri[0], tri[1], tri[2], NONE]);
         e.centre.push((p[0] + p[1] + p[2]) / 3.0);
         e.normal.push(cross.normalize_or_zero());
         e.area.push(0.5 * cross.length());
         e.surface.push(if geometry.back[leaf] { surfaces + s } else { s });
         e.material.push(material);
-        e.reflectance.push(m.diffuse_reflectance);
-        e.emission.push(m.emitted_exitance());
+        e.reflectance.push(reflectance);
+        e.emission.push(emission);
     }
     mesh.surface_source = (0..surfaces).chain(0..surfaces).collect();
     mesh.surface_has_uv = scene.surfaces.iter().chain(&scene.surfaces).map(|s| s.uvs.is_some()).collect();

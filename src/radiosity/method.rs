@@ -9,7 +9,7 @@ use std::time::Instant;
 use super::fingerprint;
 use super::fingerprint::form_factor_key;
 use super::hierarchical::Hierarchical;
-use super::hierarchy::HierarchyError;
+use super::hierarchy::{HierarchyError, LinkStructure};
 use super::matrix::{form_factors, FormFactors, PartialRows, RowPlan};
 use super::matrix_free;
 use super::resume::{self, Checkpointer, Resume, SceneKeys, ShardError};
@@ -53,13 +53,15 @@ pub struct PassOne {
 }
 
 /// Work that later jobs of a batch may reuse, keyed by what it depends on
-/// (`fingerprint::form_factor_key`), and work that earlier or parallel runs left (`Resume`: a
-/// checkpoint, merged shard parts). `Reuse::none()` keeps nothing, for a single run.
+/// (`fingerprint::form_factor_key`, `hierarchical::link_key`), and work that earlier or parallel runs
+/// left (`Resume`: a checkpoint, merged shard parts). `Reuse::none()` keeps nothing, for a single run.
 #[derive(Debug, Default)]
 pub struct Reuse {
     keep: bool,
     /// Form factors of earlier scenes, least recently used out beyond the budget: matrices are large.
     form_factors: Lru<Arc<FormFactors>>,
+    /// Refined hierarchies (nodes, links, form factors) of earlier scenes, under the same budget.
+    hierarchy_links: Lru<Arc<LinkStructure>>,
     /// The checkpoint, shard and merged parts of a single run, and its cancellation.
     pub resume: Resume,
 }
@@ -67,13 +69,35 @@ pub struct Reuse {
 impl Reuse {
     /// Keeps nothing: a single run frees its matrix as soon as it is solved.
     pub fn none() -> Self {
-        Reuse { keep: false, form_factors: Lru::default(), resume: Resume::default() }
+        Reuse { keep: false, form_factors: Lru::default(), hierarchy_links: Lru::default(), resume: Resume::default() }
     }
 
     /// Keeps nothing across jobs, but resumes from and keeps a checkpoint, computes a shard or solves
     /// merged parts as `resume` says.
     pub fn resumable(resume: Resume) -> Self {
         Reuse { resume, ..Reuse::none() }
+    }
+
+    /// True when this keeps work for later jobs (a batch).
+    pub fn keeps(&self) -> bool {
+        self.keep
+    }
+
+    /// The refined hierarchy an earlier job left under `key`, if still kept.
+    pub fn hierarchy_links(&mut self, key: u64) -> Option<Arc<LinkStructure>> {
+        self.hierarchy_links.get(key).cloned()
+    }
+
+    /// Keeps a refined hierarchy for later jobs (nothing when this keeps nothing), charging its
+    /// bytes to the budget both caches share (kept matrices are evicted first). Returns whether it
+    /// was kept.
+    pub fn keep_hierarchy_links(&mut self, key: u64, links: Arc<LinkStructure>) -> bool {
+        let bytes = links.memory_bytes();
+        if !self.keep {
+            return false;
+        }
+        self.form_factors.make_room(self.hierarchy_links.used_bytes() + bytes);
+        self.hierarchy_links.insert(key, links, bytes)
     }
 
     /// Keeps scenes' form factors for the jobs after them, within the default budget.
@@ -83,7 +107,12 @@ impl Reuse {
 
     /// Keeps scenes' form factors for the jobs after them, at most `budget_bytes` of them.
     pub fn across_jobs_within(budget_bytes: u64) -> Self {
-        Reuse { keep: true, form_factors: Lru::new(budget_bytes), resume: Resume::default() }
+        Reuse {
+            keep: true,
+            form_factors: Lru::new(budget_bytes),
+            hierarchy_links: Lru::new(budget_bytes),
+            resume: Resume::default(),
+        }
     }
 }
 
@@ -441,7 +470,10 @@ impl PassOneMethod for FullMatrix {
                 let rows = self.compute_form_factors(scene, &mesh, photons, &reuse.resume, progress, &mut stats)?;
                 let ff = Arc::new(rows.ff);
                 if let Some(key) = key {
-                    reuse.form_factors.insert(key, ff.clone(), ff.memory_bytes() as u64);
+                    // The budget is shared with kept hierarchies (none in a matrix-only batch).
+                    let bytes = ff.memory_bytes() as u64;
+                    reuse.hierarchy_links.make_room(reuse.form_factors.used_bytes() + bytes);
+                    reuse.form_factors.insert(key, ff.clone(), bytes);
                 }
                 (ff, false)
             }

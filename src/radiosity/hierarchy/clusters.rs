@@ -6,6 +6,7 @@
 use glam::Vec3;
 
 use super::nodes::{Nodes, NONE};
+use super::texels::SurfaceTexels;
 use super::HierarchyError;
 use crate::scene::SceneDescription;
 
@@ -21,21 +22,33 @@ pub struct InputTriangles {
     pub node: Vec<u32>,
 }
 
-/// Triangles for the ray accelerator: one per front input triangle.
+/// Triangles for the ray accelerator: one per front input triangle that occludes (not a cut-out:
+/// `texels::ElementMaterial::is_cut_out`).
 #[derive(Clone, Debug, Default)]
 pub struct TracingTriangles {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// Turns the scene's surfaces into input-triangle nodes and builds the cluster tree over them.
+/// The built tree: nodes (root = the index), input triangles and tracing triangles.
+pub type Built = (Nodes, u32, InputTriangles, TracingTriangles);
+
+/// `build_textured` for an untextured scene: every input triangle takes its material's Kd and π·Ke.
+pub fn build(scene: &SceneDescription) -> Result<Built, HierarchyError> {
+    build_textured(scene, &SurfaceTexels::new(scene, std::sync::Arc::default()))
+}
+
+/// Turns the scene's surfaces into input-triangle nodes and builds the cluster tree over them. Each
+/// input triangle reflects and emits what `texels` gives it (its texture means; `ElementMaterial::
+/// solved`), and front triangles that are cut-outs are left out of the tracing triangles.
 /// Returns the nodes (root = the returned index), the input triangles and the tracing triangles.
-pub fn build(scene: &SceneDescription) -> Result<(Nodes, u32, InputTriangles, TracingTriangles), HierarchyError> {
+pub fn build_textured(scene: &SceneDescription, texels: &SurfaceTexels) -> Result<Built, HierarchyError> {
     let mut nodes = Nodes::default();
     let mut inputs = InputTriangles::default();
     let mut tracing = TracingTriangles::default();
     let mut corners_of: Vec<[Vec3; 3]> = Vec::new();
     let mut meta: Vec<(u32, bool, u32)> = Vec::new();
+    let mut solved: Vec<(Vec3, Vec3)> = Vec::new();
     for (s, surface) in scene.surfaces.iter().enumerate() {
         if scene.materials.get(surface.material as usize).is_none() {
             return Err(HierarchyError::UnknownMaterial {
@@ -61,14 +74,20 @@ pub fn build(scene: &SceneDescription) -> Result<(Nodes, u32, InputTriangles, Tr
             if !(area > 0.0) || !area.is_finite() {
                 continue; // degenerate: carries no energy, and the parser already warned
             }
-            let base = tracing.positions.len() as u32;
-            tracing.positions.extend_from_slice(&tri);
-            tracing.triangles.push([base, base + 1, base + 2]);
+            let front = texels.element_materials(s as u32, tri);
+            if !front.is_cut_out() {
+                let base = tracing.positions.len() as u32;
+                tracing.positions.extend_from_slice(&tri);
+                tracing.triangles.push([base, base + 1, base + 2]);
+            }
             corners_of.push(tri);
             meta.push((s as u32, false, surface.material));
+            solved.push(front.solved());
             if surface.two_sided {
-                corners_of.push([tri[0], tri[2], tri[1]]);
+                let back = [tri[0], tri[2], tri[1]];
+                corners_of.push(back);
                 meta.push((s as u32, true, surface.material));
+                solved.push(texels.element_materials(s as u32, back).solved());
             }
         }
     }
@@ -82,8 +101,8 @@ pub fn build(scene: &SceneDescription) -> Result<(Nodes, u32, InputTriangles, Tr
     inputs.node = vec![NONE; count];
     let centroid: Vec<Vec3> = corners_of.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
     let mut push_input = |nodes: &mut Nodes, i: usize| -> u32 {
-        let m = &scene.materials[meta[i].2 as usize];
-        let node = nodes.push_element(corners_of[i], i as u32, 0, m.diffuse_reflectance, m.emitted_exitance());
+        let (reflectance, emission) = solved[i];
+        let node = nodes.push_element(corners_of[i], i as u32, 0, reflectance, emission);
         inputs.node[i] = node;
         node
     };

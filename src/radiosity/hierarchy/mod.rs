@@ -26,16 +26,21 @@ pub mod nodes;
 pub mod procedural;
 pub mod refine;
 pub mod solve;
+pub mod texels;
 pub mod visibility;
+
+use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
 
 use crate::accel::Accel;
+use crate::material::SceneTextures;
 use crate::scene::SceneDescription;
 use interpolate::LeafMesh;
-use links::{Links, LINK_BYTES};
+use links::{refinement_error, LinkRecord, Links, LINK_BYTES};
 use nodes::{Nodes, NODE_BYTES};
 use refine::{refine, RefineSettings};
+use texels::{InputTexels, SurfaceTexels};
 use visibility::VisibilityContext;
 
 /// Errors of the hierarchical solver.
@@ -217,14 +222,81 @@ pub fn count_input_triangles(scene: &SceneDescription) -> usize {
     scene.surfaces.iter().map(|s| s.vertices.len().saturating_sub(2) * if s.two_sided { 2 } else { 1 }).sum()
 }
 
-/// Solves the scene's diffuse radiosity hierarchically. Builds its own ray accelerator over the
-/// scene's triangles. Deterministic: the same scene and parameters give the same values for any
-/// number of rayon threads.
+/// The refined hierarchy a solve ends with: nodes (with their geometry and tree), links with their
+/// form factors, the input triangles and the occluders. Form factors and visibility depend on the
+/// geometry only (and on which triangles are cut-outs), so a later solve of the same geometry with
+/// other materials may start from it (`solve_reusing`), as a batch does through `Reuse`.
+#[derive(Clone, Debug)]
+pub struct LinkStructure {
+    /// With the materials and the final exitance of the solve that refined them.
+    nodes: Nodes,
+    links: Links,
+    /// The allowed error per m² that solve refined against (`RefineSettings::threshold`, W/m²).
+    threshold: f64,
+    root: usize,
+    inputs: clusters::InputTriangles,
+    tracing: clusters::TracingTriangles,
+}
+
+impl LinkStructure {
+    /// Bytes it holds (nodes, links, input and tracing triangles): what a cache keeping it is charged.
+    pub fn memory_bytes(&self) -> u64 {
+        let i = &self.inputs;
+        let t = &self.tracing;
+        (self.nodes.len() * NODE_BYTES
+            + self.links.memory_bytes()
+            + std::mem::size_of_val(&i.surface[..])
+            + std::mem::size_of_val(&i.back[..])
+            + std::mem::size_of_val(&i.material[..])
+            + std::mem::size_of_val(&i.node[..])
+            + std::mem::size_of_val(&t.positions[..])
+            + std::mem::size_of_val(&t.triangles[..])) as u64
+    }
+
+    pub fn link_count(&self) -> usize {
+        self.links.len()
+    }
+}
+
+/// Solves the scene's diffuse radiosity hierarchically, with every material's Kd and π·Ke (no
+/// textures). Builds its own ray accelerator over the scene's triangles. Deterministic: the same scene
+/// and parameters give the same values for any number of rayon threads.
 pub fn solve(
     scene: &SceneDescription,
     params: &HierarchyParams,
     on_progress: &mut dyn FnMut(HierarchyProgress),
 ) -> Result<HierarchicalSolution, HierarchyError> {
+    solve_reusing(scene, Arc::default(), params, None, on_progress).map(|(solution, _)| solution)
+}
+
+/// How much worse (relative) new materials must make a kept link's error ratio before a re-solve
+/// splits it (see `solve_reusing`): changes below 10% are within what the solution's own
+/// convergence and the visibility estimate move a ratio by, and are no reason to refine.
+pub const REUSE_GROWTH: f64 = 0.1;
+
+/// `solve` with the scene's loaded `textures` (each element reflects its texture means, see
+/// `texels`), optionally starting from the links of an earlier solve of the same geometry and
+/// parameters (`reuse`, which the caller matches by `hierarchical::link_key`). Returns the solution
+/// and the link structure it ended with.
+///
+/// Reuse: the nodes and links are kept and take the new materials (every element its `texels`
+/// means, every cluster the area-weighted aggregates of its children), and the first pass solves on
+/// the kept links as they are. The power-driven refinement depends on the materials, so the later
+/// passes re-refine, but only where the new materials made a link worse: a kept link is split only
+/// when its new error ratio r′ = refinement_error / allowed error (new solution, new threshold)
+/// exceeds both 1 and (1 + `REUSE_GROWTH`)·r, r its ratio under the solve that refined it (old
+/// materials, its final solution). A materials change that scales every error like the threshold
+/// (the same materials, or all emission scaled) therefore splits nothing and gives the fresh solve's
+/// links, so the re-solve equals the fresh one within the solver tolerance. Only new links are
+/// estimated (`HierarchyStats::links_estimated`); links the old materials needed finer are kept (never
+/// coarsened, which only lowers the error estimate). Passes stop early when nothing needs splitting.
+pub fn solve_reusing(
+    scene: &SceneDescription,
+    textures: Arc<SceneTextures>,
+    params: &HierarchyParams,
+    reuse: Option<&LinkStructure>,
+    on_progress: &mut dyn FnMut(HierarchyProgress),
+) -> Result<(HierarchicalSolution, LinkStructure), HierarchyError> {
     params.validate()?;
     let triangles = count_input_triangles(scene);
     // Before anything large: the input triangles, their clusters and the links of the self-link
@@ -233,8 +305,22 @@ pub fn solve(
     if needed_bytes > params.memory_bytes {
         return Err(HierarchyError::OverBudget { triangles, needed_bytes, budget_bytes: params.memory_bytes });
     }
-    let (mut nodes, root, inputs, tracing) = clusters::build(scene)?;
-    let root = root as usize;
+    let surfaces = SurfaceTexels::new(scene, textures);
+    let (mut nodes, root, inputs, tracing, mut links) = match reuse {
+        Some(kept) => {
+            let mut nodes = kept.nodes.clone();
+            let texels = InputTexels { surfaces, input_surface: kept.inputs.surface.clone() };
+            assign_materials(&mut nodes, &texels);
+            (nodes, kept.root, kept.inputs.clone(), kept.tracing.clone(), kept.links.clone())
+        }
+        None => {
+            let (mut nodes, root, inputs, tracing) = clusters::build_textured(scene, &surfaces)?;
+            if !surfaces.is_untextured() {
+                nodes.texels = Some(Arc::new(InputTexels { surfaces, input_surface: inputs.surface.clone() }));
+            }
+            (nodes, root as usize, inputs, tracing, Links::default())
+        }
+    };
     let accel = Accel::build(&tracing.positions, &tracing.triangles);
     let diagonal = scene.diagonal();
     let ctx =
@@ -255,47 +341,113 @@ pub fn solve(
         ..Default::default()
     };
     solve::reset_to_emission(&mut nodes, root);
-    let mut links = Links::default();
-    for pass in 1..=params.refinement_passes {
-        let (records, self_links) = if pass == 1 {
-            (Vec::new(), if nodes.is_cluster[root] { vec![root as u32] } else { Vec::new() })
-        } else {
-            (links.to_records(), Vec::new())
-        };
-        let outcome = refine(&mut nodes, &ctx, records, self_links, &settings, &mut |round, kept, count| {
-            on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })
-        });
-        links = outcome.links;
-        stats.refinement_passes = pass;
-        stats.refinement_rounds += outcome.rounds;
-        stats.links_estimated += outcome.estimated;
-        stats.budget_exceeded |= outcome.budget_exceeded;
-        stats.peak_bytes = stats.peak_bytes.max(outcome.peak_bytes);
-        stats.error_after_pass_w.push(outcome.error_after_w);
-        let (sweeps, converged) = solve::solve(
-            &mut nodes,
-            &links,
-            root,
-            params.relaxation,
-            params.tolerance,
-            params.max_sweeps,
-            &mut |sweep, c| {
-                on_progress(HierarchyProgress::Sweeping {
-                    pass,
-                    sweep,
-                    max_change: c.max_change,
-                    max_exitance: c.max_exitance,
-                })
-            },
-        );
-        stats.sweeps += sweeps;
-        stats.converged = converged;
+    match reuse {
+        None => {
+            for pass in 1..=params.refinement_passes {
+                let (records, self_links) = if pass == 1 {
+                    (Vec::new(), if nodes.is_cluster[root] { vec![root as u32] } else { Vec::new() })
+                } else {
+                    (links.to_records(), Vec::new())
+                };
+                let outcome = refine(&mut nodes, &ctx, records, self_links, &settings, &mut |round, kept, count| {
+                    on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })
+                });
+                stats.add_refinement(pass, &outcome, outcome.error_after_w);
+                links = outcome.links;
+                sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, on_progress);
+            }
+        }
+        Some(kept) => {
+            stats.refinement_passes = 1;
+            stats.error_after_pass_w.push(refine::total_error(&nodes, &links.to_records()));
+            sweep_pass(&mut nodes, &links, root, params, 1, &mut stats, on_progress);
+            for pass in 2..=params.refinement_passes {
+                let ratio = |n: &Nodes, l: &LinkRecord, threshold: f64| {
+                    refinement_error(n, l) / (threshold * n.area[l.receiver as usize].max(settings.floor_area) as f64)
+                };
+                let (active, frozen): (Vec<LinkRecord>, Vec<LinkRecord>) =
+                    links.to_records().into_iter().partition(|l| {
+                        let new = ratio(&nodes, l, settings.threshold);
+                        new > 1.0 && new > (1.0 + REUSE_GROWTH) * ratio(&kept.nodes, l, kept.threshold)
+                    });
+                if active.is_empty() {
+                    break;
+                }
+                let outcome = refine(&mut nodes, &ctx, active, Vec::new(), &settings, &mut |round, kept, count| {
+                    on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })
+                });
+                let mut records = outcome.links.to_records();
+                records.extend(frozen);
+                let error_after_w = refine::total_error(&nodes, &records);
+                links = Links::from_records(nodes.len(), records);
+                stats.add_refinement(pass, &outcome, error_after_w);
+                sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, on_progress);
+            }
+        }
     }
     stats.nodes = nodes.len();
     stats.links = links.len();
     stats.bytes = nodes.len() * NODE_BYTES + links.memory_bytes();
     stats.peak_bytes = stats.peak_bytes.max(stats.bytes);
-    Ok(solution(&nodes, &inputs, root, stats))
+    let solved = solution(&nodes, &inputs, root, stats);
+    Ok((solved, LinkStructure { nodes, links, threshold: settings.threshold, root, inputs, tracing }))
+}
+
+impl HierarchyStats {
+    /// Records refinement pass `pass` (with the Σ link error it left, W).
+    fn add_refinement(&mut self, pass: u32, outcome: &refine::RefineOutcome, error_after_w: f64) {
+        self.refinement_passes = pass;
+        self.refinement_rounds += outcome.rounds;
+        self.links_estimated += outcome.estimated;
+        self.budget_exceeded |= outcome.budget_exceeded;
+        self.peak_bytes = self.peak_bytes.max(outcome.peak_bytes);
+        self.error_after_pass_w.push(error_after_w);
+    }
+}
+
+/// The Gauss-Seidel sweeps of pass `pass` over `links` (warm-started from the nodes' exitance),
+/// recorded in `stats`.
+fn sweep_pass(
+    nodes: &mut Nodes,
+    links: &Links,
+    root: usize,
+    params: &HierarchyParams,
+    pass: u32,
+    stats: &mut HierarchyStats,
+    on_progress: &mut dyn FnMut(HierarchyProgress),
+) {
+    let (sweeps, converged) =
+        solve::solve(nodes, links, root, params.relaxation, params.tolerance, params.max_sweeps, &mut |sweep, c| {
+            on_progress(HierarchyProgress::Sweeping {
+                pass,
+                sweep,
+                max_change: c.max_change,
+                max_exitance: c.max_exitance,
+            })
+        });
+    stats.sweeps += sweeps;
+    stats.converged = converged;
+}
+
+/// Gives every node of a kept hierarchy the materials of `texels`: each element (input triangle or
+/// piece) its own means (`InputTexels::solved_materials`), each cluster the area-weighted aggregates
+/// of its children (`Nodes::set_cluster_children`). Children always have higher indices than their
+/// parent, so one pass in reverse index order sees every child before its cluster.
+fn assign_materials(nodes: &mut Nodes, texels: &InputTexels) {
+    for n in (0..nodes.len()).rev() {
+        if nodes.is_cluster[n] {
+            let (first, count) = (nodes.first_child[n], nodes.child_count[n]);
+            if first != nodes::NONE {
+                nodes.set_cluster_children(n, first, count);
+            }
+        } else {
+            let (reflectance, emission) = texels.solved_materials(nodes.input[n], nodes.corners[n]);
+            nodes.reflectance[n] = reflectance;
+            nodes.emission[n] = emission;
+            nodes.reflectance_max[n] = reflectance.max_element();
+        }
+    }
+    nodes.texels = (!texels.surfaces.is_untextured()).then(|| Arc::new(texels.clone()));
 }
 
 /// (Σ A·E, Σ A·E / Σ A) over the input triangles (mean channel; W and W/m²); (1, 1) when nothing

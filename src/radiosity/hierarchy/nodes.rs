@@ -3,7 +3,10 @@
 
 use glam::{DVec3, Vec3};
 
+use std::sync::Arc;
+
 use super::form_factor::projected_area_bins;
+use super::texels::InputTexels;
 
 /// "No node": a leaf's `first_child`, the root's `parent`, a cluster's `input`.
 pub const NONE: u32 = u32::MAX;
@@ -57,6 +60,9 @@ pub struct Nodes {
     pub gathered: Vec<DVec3>,
     /// Mean channel of `exitance`, the B of the error estimate (linear, so pulling commutes with it).
     pub exitance_mean: Vec<f64>,
+    /// A textured scene's texture means (`texels`): pieces made by `subdivide` take the means over
+    /// their own uv image. `None`: pieces inherit their parent's reflectance and emission.
+    pub texels: Option<Arc<InputTexels>>,
 }
 
 impl Nodes {
@@ -200,8 +206,9 @@ impl Nodes {
         }
     }
 
-    /// Splits leaf element `node` 1→4 at its edge midpoints (children inherit material and exitance,
-    /// so the pulled value of the parent is unchanged) and returns the first child. The midpoint of
+    /// Splits leaf element `node` 1→4 at its edge midpoints and returns the first child. Children
+    /// inherit the parent's exitance (so its pulled value is unchanged) and its reflectance and
+    /// emission, or with `texels` their own texture means, whose area-weighted mean is the parent's. The midpoint of
     /// edge (a, b) is computed as (a + b)·0.5, which is symmetric in a and b, so neighbours compute
     /// bit-identical vertices.
     pub fn subdivide(&mut self, node: usize) -> u32 {
@@ -214,6 +221,10 @@ impl Nodes {
         let exitance = self.exitance[node];
         let first = self.len() as u32;
         for tri in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
+            let (rho, e) = match &self.texels {
+                Some(t) => t.solved_materials(input, tri),
+                None => (rho, e),
+            };
             let child = self.push_element(tri, input, level, rho, e) as usize;
             // Exact quarter areas and the parent's normal keep push-pull exactly conservative.
             self.area[child] = parent_area * 0.25;
