@@ -261,6 +261,12 @@ pub struct RenderParams {
     /// The irradiance cache's accuracy a (Ward's largest error weight); 0 gathers at every diffuse hit
     /// with no cache.
     pub cache_accuracy: f32,
+    /// The gather's second bounce: a gather ray's hit closer than this many of the hit element's
+    /// sizes (√area) has its exitance estimated at the point (`trace::gather::near`) instead of
+    /// interpolated; 0 turns it off, infinity applies it everywhere.
+    pub near_bounce: f32,
+    /// Rays of the secondary gather at a near hit.
+    pub near_bounce_rays: u32,
     /// Shadow rays per diffuse hit when `direct = Pixel` (and per Phong highlight), shared by all
     /// emitters: each ray goes to a point chosen over the emitters' total area, not one per emitter.
     pub light_samples: u32,
@@ -276,6 +282,8 @@ impl Default for RenderParams {
             final_gather: FinalGatherMode::On,
             gather_rays: 1024,
             cache_accuracy: 0.15,
+            near_bounce: 1.0,
+            near_bounce_rays: 2,
             light_samples: 4,
             max_depth: 8,
             min_throughput: 1e-3,

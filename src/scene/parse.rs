@@ -111,6 +111,8 @@ struct RawRender {
     final_gather: Option<FinalGatherMode>,
     gather_rays: Option<S<i64>>,
     cache_accuracy: Option<S<f32>>,
+    near_bounce: Option<S<f32>>,
+    near_bounce_rays: Option<S<i64>>,
     light_samples: Option<S<i64>>,
     max_depth: Option<S<i64>>,
     min_throughput: Option<S<f32>>,
@@ -566,6 +568,12 @@ fn render_params(loc: &Locator, raw: Option<&RawRender>, base: RenderParams) -> 
     if let Some(a) = loc.ranged(&r.cache_accuracy, "cache_accuracy", |x| (0.0..=1.0).contains(&x), "in [0, 1]")? {
         p.cache_accuracy = a;
     }
+    if let Some(k) =
+        loc.ranged(&r.near_bounce, "near_bounce", |x| x >= 0.0, "a non-negative number of element sizes")?
+    {
+        p.near_bounce = k;
+    }
+    p.near_bounce_rays = loc.positive_int(&r.near_bounce_rays, "near_bounce_rays", 1, 256, p.near_bounce_rays)?;
     p.light_samples = loc.positive_int(&r.light_samples, "light_samples", 1, 4096, p.light_samples)?;
     p.max_depth = loc.positive_int(&r.max_depth, "max_depth", 1, 256, p.max_depth)?;
     if let Some(t) = loc.ranged(&r.min_throughput, "min_throughput", |x| (0.0..1.0).contains(&x), "in [0, 1)")? {

@@ -108,7 +108,25 @@ impl<'a> DirectLight<'a> {
         sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> DirectEstimate {
-        let samples = self.samples;
+        self.estimate_with(self.samples, p, n, highlight, sampler, counts)
+    }
+
+    /// The direct irradiance E at `p` with normal `n` (as `estimate`, without a highlight) from
+    /// `samples` shadow rays instead of `light_samples`: for points a final gather re-estimates
+    /// (`trace::gather::near`).
+    pub fn irradiance(&self, p: Vec3, n: Vec3, samples: u32, sampler: &mut Sampler, counts: &mut RayCounts) -> Vec3 {
+        self.estimate_with(samples, p, n, None, sampler, counts).irradiance
+    }
+
+    fn estimate_with(
+        &self,
+        samples: u32,
+        p: Vec3,
+        n: Vec3,
+        highlight: Option<(Vec3, f32)>,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> DirectEstimate {
         let mut out = DirectEstimate::default();
         if samples == 0 || self.emitters.is_empty() {
             return out;
@@ -150,7 +168,7 @@ impl<'a> DirectLight<'a> {
             }
         }
         if let Some((mirror, exponent)) = highlight {
-            out.highlight += self.highlight_by_lobe(origin, n, mirror, exponent, sampler, counts);
+            out.highlight += self.highlight_by_lobe(samples, origin, n, mirror, exponent, sampler, counts);
         }
         out
     }
@@ -169,8 +187,10 @@ impl<'a> DirectLight<'a> {
 
     /// The lobe-sampling half of the highlight estimate (see `estimate`): N directions from the Phong
     /// lobe, each weighted by the power heuristic against the light samples' density for it.
+    #[allow(clippy::too_many_arguments)]
     fn highlight_by_lobe(
         &self,
+        samples: u32,
         origin: Vec3,
         n: Vec3,
         mirror: Vec3,
@@ -178,7 +198,6 @@ impl<'a> DirectLight<'a> {
         sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Vec3 {
-        let samples = self.samples;
         let count = samples as f32;
         let pattern = sampler.pattern_2d(samples);
         let mut sum = Vec3::ZERO;

@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3};
 use super::caustics::CausticMap;
 use super::diffuse::{Diffuse, DiffuseEstimator};
 use super::direct_light::{DirectEstimate, DirectLight};
-use super::gather::FinalGather;
+use super::gather::{FinalGather, NearBounce};
 use super::parts::{RadianceParts, Record};
 use crate::accel::Accel;
 use crate::film::Sampler;
@@ -110,6 +110,8 @@ pub struct Tracer<'a> {
     pixel_angle_rad: f32,
     /// The final gather that replaces the interpolated indirect light (`with_final_gather`).
     gather: Option<FinalGather>,
+    /// The gather's second bounce at near hits (`RenderParams::near_bounce`; `None` when 0).
+    near_bounce: Option<NearBounce>,
 }
 
 impl<'a> Tracer<'a> {
@@ -161,6 +163,8 @@ impl<'a> Tracer<'a> {
             scale,
             pixel_angle_rad: 0.0,
             gather: None,
+            near_bounce: (params.near_bounce > 0.0)
+                .then(|| NearBounce::new(params.near_bounce, params.near_bounce_rays)),
         })
     }
 
@@ -232,6 +236,16 @@ impl<'a> Tracer<'a> {
 
     pub fn surfaces(&self) -> Option<&[Surface]> {
         self.surfaces
+    }
+
+    /// Per-pixel direct light from the emitters (shadow rays).
+    pub fn direct_light(&self) -> &DirectLight<'a> {
+        &self.direct
+    }
+
+    /// The gather's second bounce at near hits, if on.
+    pub fn near_bounce(&self) -> Option<&NearBounce> {
+        self.near_bounce.as_ref()
     }
 
     pub fn min_throughput(&self) -> f32 {

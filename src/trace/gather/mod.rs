@@ -2,16 +2,19 @@
 //! at a diffuse point seen by the camera the indirect light is gathered over the hemisphere from the
 //! solution, so the elements' errors matter one bounce away, smoothed by the integral. An irradiance
 //! cache with gradients (Ward, Rubinstein and Clear 1988; Ward and Heckbert 1992) makes it cheap.
-//! `hemisphere` holds the cells and gradient kernels, `rays` what one gather ray reads, `cache` the
-//! records and their interpolation, `prepass` the deterministic filling before the image.
+//! `hemisphere` holds the cells and gradient kernels, `rays` what one gather ray reads, `near` the
+//! second bounce where a ray lands close by, `cache` the records and their interpolation, `prepass`
+//! the deterministic filling before the image.
 
 pub mod cache;
 pub mod hemisphere;
+pub mod near;
 pub mod prepass;
 pub mod rays;
 
 pub use cache::{IrradianceCache, IrradianceRecord};
 pub use hemisphere::{HemisphereEstimate, Strata};
+pub use near::NearBounce;
 pub use prepass::{fill, PrepassStats};
 
 use glam::Vec3;

@@ -1,12 +1,14 @@
 //! The rays of one final gather: a stratified cosine-weighted hemisphere at a diffuse point, each ray
-//! reading the radiosity solution where it lands (less the emission, which the direct term holds), with
-//! mirrors and glass on the way followed by the Whitted rules to a bounded depth.
+//! reading the radiosity solution where it lands (less the emission, which the direct term holds), or
+//! estimating it again at the point where the hit is near (`near`), with mirrors and glass on the way
+//! followed by the Whitted rules to a bounded depth.
 
 use std::f32::consts::PI;
 
 use glam::Vec3;
 
 use super::hemisphere::{estimate, frame, HemisphereEstimate, Strata};
+use super::near::NearBounce;
 use crate::film::Sampler;
 use crate::trace::whitted::{RayCounts, Tracer};
 use crate::transport::ray_stack::RayStack;
@@ -20,7 +22,8 @@ impl Tracer<'_> {
     /// The gather at point `p` with unit normal `n` (the side being shaded) over `strata`, one jittered
     /// ray per cell (`gather_radiance`), and its irradiance, harmonic mean distance and gradients
     /// (`hemisphere::estimate`). The irradiance is the indirect part: light from the emitters along
-    /// straight lines is left out; what arrives through mirrors and glass is in.
+    /// straight lines is left out; what arrives through mirrors and glass is in. Near hits get the
+    /// tracer's second bounce (`[render] near_bounce`, see `near`).
     pub fn gather(
         &self,
         p: Vec3,
@@ -37,7 +40,7 @@ impl Tracer<'_> {
             for k in 0..strata.sectors {
                 let local = strata.direction(j, k, sampler.next_1d(), sampler.next_1d());
                 let dir = (t * local.x + b * local.y + n * local.z).normalize();
-                let (l, r) = self.gather_radiance(origin, dir, counts);
+                let (l, r) = self.gather_radiance(origin, dir, self.near_bounce(), sampler, counts);
                 radiance.push(l);
                 distance.push(r);
             }
@@ -48,9 +51,18 @@ impl Tracer<'_> {
     /// Radiance arriving at `origin` from `dir` as the gather counts it, and the distance to the first
     /// surface (infinite if none): at a diffuse hit x on element e, (B(x) − E_e)/π, with B the
     /// interpolated exitance (`Diffuse::radiosity_at`); the emission E_e counts only after a specular
-    /// bounce (shadow rays and pass one's direct part see straight paths only). Mirrors and glass add
-    /// their branches (`transport::scatter`) up to `GATHER_SPECULAR_DEPTH` bounces.
-    pub fn gather_radiance(&self, origin: Vec3, dir: Vec3, counts: &mut RayCounts) -> (Vec3, f32) {
+    /// bounce (shadow rays and pass one's direct part see straight paths only). With `near`, a first
+    /// hit closer than `NearBounce::applies` reads B(x) − E from `near_exitance` instead, estimated at
+    /// x. Mirrors and glass add their branches (`transport::scatter`) up to `GATHER_SPECULAR_DEPTH`
+    /// bounces.
+    pub fn gather_radiance(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        near: Option<&NearBounce>,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> (Vec3, f32) {
         let mut stack = RayStack::<GATHER_STACK>::new(origin, dir);
         let mut radiance = Vec3::ZERO;
         let mut first_distance = f32::INFINITY;
@@ -65,9 +77,17 @@ impl Tracer<'_> {
             }
             let material = &self.materials()[hit.material as usize];
             if let Some(element) = hit.element.map(|e| e as usize) {
-                let exitance = self.diffuse().radiosity_at(&hit);
-                let emission = if ray.depth == 0 { elements.emission[element] } else { Vec3::ZERO };
-                radiance += ray.throughput * (exitance - emission).max(Vec3::ZERO) / PI;
+                let reflected = match near {
+                    Some(near) if ray.depth == 0 && near.applies(distance, elements.area[element]) => {
+                        self.near_exitance(&hit, element, near, sampler, counts)
+                    }
+                    _ => {
+                        let exitance = self.diffuse().radiosity_at(&hit);
+                        let emission = if ray.depth == 0 { elements.emission[element] } else { Vec3::ZERO };
+                        exitance - emission
+                    }
+                };
+                radiance += ray.throughput * reflected.max(Vec3::ZERO) / PI;
             } else if !material.is_dielectric() {
                 continue;
             }

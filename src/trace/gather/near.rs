@@ -1,0 +1,99 @@
+//! The second bounce of a final gather where its ray lands close by (Lischinski, Tampieri and
+//! Greenberg 1993; Lightscape's regathering): there the hit element subtends a large solid angle, and
+//! its interpolated exitance carries the element's own bias (along a concave edge, the same bias the
+//! gather is meant to remove), so the exitance is estimated again at the point.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+
+use super::hemisphere::{frame, Strata};
+use crate::film::Sampler;
+use crate::trace::whitted::{RayCounts, Tracer};
+use crate::transport::SurfaceHit;
+
+/// Shadow rays per near hit: one, since a gather averages its near hits' estimates over hundreds of
+/// cells (and each cell's sample stays unbiased).
+pub const NEAR_LIGHT_SAMPLES: u32 = 1;
+
+/// When and how a gather ray's hit is re-estimated (`[render] near_bounce`, `near_bounce_rays`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearBounce {
+    /// A hit closer than `distance_factor`·√Aₑ (Aₑ the hit element's area) is near; 0 turns the
+    /// second bounce off, infinity applies it to every hit.
+    pub distance_factor: f32,
+    /// Cells of the secondary gather at a near hit.
+    pub strata: Strata,
+}
+
+impl NearBounce {
+    /// `rays` cells: M × N as `Strata::for_rays` from 6 rays up, one ring of `rays` sectors below.
+    pub fn new(distance_factor: f32, rays: u32) -> NearBounce {
+        let strata = if rays >= 6 { Strata::for_rays(rays) } else { Strata { rings: 1, sectors: rays.max(1) } };
+        NearBounce { distance_factor, strata }
+    }
+
+    /// Whether a hit `distance` away on an element of area `element_area` is near: r < k·√Aₑ.
+    pub fn applies(&self, distance: f32, element_area: f32) -> bool {
+        distance < self.distance_factor * element_area.max(0.0).sqrt()
+    }
+}
+
+impl Tracer<'_> {
+    /// The reflected exitance B(x) − E at a gather ray's near hit x on `element` (reflectance ρₑ, the
+    /// element's as in pass one), estimated at the point rather than interpolated:
+    ///
+    /// B(x) − E = ρₑ·(E_direct(x) + H(x)),
+    ///
+    /// E_direct from `NEAR_LIGHT_SAMPLES` shadow rays (`DirectLight::irradiance`), H = π/(MN) Σ L_jk a
+    /// secondary gather over `near.strata` whose rays read the interpolated solution
+    /// (`gather_radiance` without a further near bounce). The solution's errors then enter one bounce
+    /// further away, damped by ρ.
+    pub fn near_exitance(
+        &self,
+        hit: &SurfaceHit,
+        element: usize,
+        near: &NearBounce,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
+        let reflectance = self.mesh().elements.reflectance[element];
+        if reflectance.max_element() <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let (x, n) = (hit.position, hit.geometric_normal);
+        let direct = self.direct_light().irradiance(x, n, NEAR_LIGHT_SAMPLES, sampler, counts);
+        let (t, b) = frame(n);
+        let origin = x + n * self.ray_offset();
+        let strata = near.strata;
+        let mut sum = Vec3::ZERO;
+        for j in 0..strata.rings {
+            for k in 0..strata.sectors {
+                let local = strata.direction(j, k, sampler.next_1d(), sampler.next_1d());
+                let dir = (t * local.x + b * local.y + n * local.z).normalize();
+                sum += self.gather_radiance(origin, dir, None, sampler, counts).0;
+            }
+        }
+        let indirect = sum * (PI / strata.cells() as f32);
+        reflectance * (direct + indirect)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn few_rays_get_one_ring() {
+        assert_eq!(NearBounce::new(2.0, 4).strata, Strata { rings: 1, sectors: 4 });
+        assert_eq!(NearBounce::new(2.0, 16).strata, Strata::for_rays(16));
+    }
+
+    #[test]
+    fn near_is_relative_to_the_hit_elements_size() {
+        let near = NearBounce::new(2.0, 8);
+        assert!(near.applies(0.19, 0.01) && !near.applies(0.21, 0.01));
+        assert!(!NearBounce::new(0.0, 8).applies(0.0, 1.0));
+        assert!(NearBounce::new(f32::INFINITY, 8).applies(100.0, 1e-6));
+    }
+}
