@@ -23,16 +23,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-
-
-def timed(cmd):
-    """Run cmd under /usr/bin/time; return (user+sys CPU s, wall s, max RSS MiB)."""
-    tf = "/tmp/radray_baseline_time.txt"
-    r = subprocess.run(["/usr/bin/time", "-f", "%U %S %e %M", "-o", tf] + cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        raise RuntimeError("exit %d: %s" % (r.returncode, r.stderr.strip()[-500:]))
-    u, s, e, m = open(tf).read().split()[-4:]
-    return float(u) + float(s), float(e), float(m) / 1024.0
+sys.path.insert(0, HERE)
+from timed import timed  # noqa: E402
 
 
 def main():
@@ -58,7 +50,7 @@ def main():
                 rec = results.get(key, {})
                 if not a.compare_only:
                     try:
-                        cpu, wall, rss = timed([a.radray, "--quiet", "render", toml, "-o", img, "--quality", q] + flags)
+                        cpu, wall, rss, _ = timed([a.radray, "--quiet", "render", toml, "-o", img, "--quality", q] + flags)
                     except RuntimeError as e:  # e.g. a scene this binary refuses: record the message
                         rec = {"error": str(e)}
                         results[key] = rec

@@ -22,15 +22,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-
-
-def timed(cmd):
-    tf = "/tmp/radray_tte_time.txt"
-    r = subprocess.run(["/usr/bin/time", "-f", "%U %S %e", "-o", tf] + cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        raise SystemExit("exit %d: %s\n%s" % (r.returncode, " ".join(cmd), r.stderr[-800:]))
-    u, s, e = open(tf).read().split()[-3:]
-    return float(u) + float(s), float(e), r.stdout
+sys.path.insert(0, HERE)
+from timed import timed  # noqa: E402
 
 
 def rel_mse(radray, img, ref):
@@ -58,7 +51,7 @@ def main():
         if not a.skip_path_tracer:
             for spp in [int(s) for s in a.spp.split(",")]:
                 img = os.path.join(a.out, "%s.mitsuba.%d.exr" % (room, spp))
-                cpu, wall, out = timed([sys.executable, os.path.join(HERE, "render_one.py"), room, str(spp), "7", img])
+                cpu, wall, _, out = timed([sys.executable, os.path.join(HERE, "render_one.py"), room, str(spp), "7", img])
                 info = json.loads(out.strip().splitlines()[-1])
                 rec["path_tracer"][str(spp)] = {"cpu_s": cpu, "wall_s": wall, "render_s": info["render_s"],
                                                 "relMSE": rel_mse(a.radray, img, ref), "load1": os.getloadavg()[0]}
@@ -75,7 +68,7 @@ def main():
             name, _, flags = variant.partition("=")
             img = os.path.join(a.out, "%s.radray.%s.exr" % (room, name))
             toml = os.path.join(ROOT, "scenes", "rooms", room + ".toml")
-            cpu, wall, _ = timed([a.radray, "--quiet", "render", toml, "-o", img] + flags.split())
+            cpu, wall, _, _ = timed([a.radray, "--quiet", "render", toml, "-o", img] + flags.split())
             rec["radray"][name] = {"cpu_s": cpu, "wall_s": wall, "relMSE": rel_mse(a.radray, img, ref), "flags": flags}
             print("%-13s radray %-12s relMSE %.5f, %.1f CPU-s" % (room, name, rec["radray"][name]["relMSE"], cpu),
                   file=sys.stderr, flush=True)

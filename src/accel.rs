@@ -98,7 +98,12 @@ impl Accel {
         self.triangle_id.is_empty()
     }
 
+    /// The ray handed to obvhs. Its direction has no negative zeros: obvhs picks a child's near and far
+    /// planes by `dir < 0` (false for −0.0) but inverts −0.0 to −1/ε, so a component of −0.0 swaps
+    /// the planes, empties the slab, and an axis-aligned ray such as (0, −1, 0) written as −n misses
+    /// the floor under it. Adding +0.0 turns −0.0 into +0.0 and leaves every other value alone.
     fn bvh_ray(origin: Vec3, dir: Vec3, t_max: f32) -> BvhRay {
+        let dir = dir + Vec3::ZERO;
         let shifted = Vec3A::from(origin - dir * BVH_ORIGIN_SHIFT);
         BvhRay::new(shifted, dir.into(), 0.0, t_max + BVH_ORIGIN_SHIFT)
     }
@@ -463,5 +468,23 @@ mod tests {
         assert!((h.t - 1e-5).abs() < 1e-7, "{h:?}");
         assert!(accel.occluded(vec3(0.25, 0.25, 1e-5), Vec3::NEG_Z, 1.0));
         assert!(!accel.occluded(vec3(0.25, 0.25, 1.0), Vec3::NEG_Z, 0.5));
+    }
+
+    #[test]
+    fn axis_aligned_rays_with_negative_zero_components_hit() {
+        // A floor quad of a unit box; rays straight down written as −n = (−0, −1, −0), from several
+        // heights and over interior points, including ones on the quad's diagonal.
+        let positions = [vec3(0.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0), vec3(1.0, 0.0, 1.0), vec3(1.0, 0.0, 0.0)];
+        let accel = Accel::build(&positions, &[[0, 1, 2], [0, 2, 3]]);
+        let down = -Vec3::Y;
+        assert!(down.x.is_sign_negative() && down.z.is_sign_negative());
+        for &(x, z) in &[(0.1f32, 0.02f32), (0.5, 0.5), (0.9, 0.3), (0.02, 0.7)] {
+            for height in [1e-3f32, 1e-2, 0.5] {
+                let h = accel.closest_hit(vec3(x, height, z), down, 0.0, 1.0);
+                let h = h.unwrap_or_else(|| panic!("({x}, {height}, {z}) straight down missed the floor"));
+                assert!((h.t - height).abs() < 1e-6, "{h:?}");
+                assert!(accel.occluded(vec3(x, height, z), down, 1.0));
+            }
+        }
     }
 }

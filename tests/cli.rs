@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::radray;
+use common::{radray, small_batch_job};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -180,40 +180,13 @@ fn compare_reports_metrics_and_writes_difference_images() {
 fn batch_reuses_form_factors_and_records_failures() {
     let dir = tempfile::tempdir().unwrap();
     let s = scene("cornell_box.toml");
-    let jobs = format!(
-        r#"
-[[job]]
-scene = "{s}"
-output = ["a.png", "a.exr"]
-mode = "radiosity"
-width = 16
-height = 16
-spp = 1
-quality = "preview"
-
-[[job]]
-scene = "{s}"
-output = "b.png"
-width = 16
-height = 12
-spp = 1
-quality = "preview"
-camera = {{ eye = [400.0, 300.0, -600.0] }}
-
-[[job]]
-scene = "{s}"
-output = "c.png"
-width = 16
-height = 16
-spp = 1
-quality = "preview"
-materials = {{ light = {{ ke = [4.0, 8.0, 20.0] }} }}
-
-[[job]]
-scene = "does_not_exist.toml"
-output = "d.png"
-"#
-    );
+    let jobs = [
+        small_batch_job(&s, r#"["a.png", "a.exr"]"#, 16, "mode = \"radiosity\""),
+        small_batch_job(&s, "\"b.png\"", 12, "camera = { eye = [400.0, 300.0, -600.0] }"),
+        small_batch_job(&s, "\"c.png\"", 16, "materials = { light = { ke = [4.0, 8.0, 20.0] } }"),
+        "[[job]]\nscene = \"does_not_exist.toml\"\noutput = \"d.png\"\n".to_string(),
+    ]
+    .concat();
     let jobs_path = dir.path().join("jobs.toml");
     std::fs::write(&jobs_path, jobs).unwrap();
     let out = radray(&["batch", jobs_path.to_str().unwrap()]);

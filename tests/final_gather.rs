@@ -7,15 +7,13 @@ mod common;
 
 use std::f32::consts::PI;
 
-use common::{emitter, scene, solution, surface};
+use common::{emitter, scene, surface, Setup};
 use glam::{vec3, Vec3};
 use radray::accel::Accel;
 use radray::film::Sampler;
-use radray::mesh::Mesh;
 use radray::progress::Progress;
-use radray::radiosity::Solution;
 use radray::run::{self, RunStats};
-use radray::scene::{Camera, DirectMode, FinalGatherMode, Material, RenderParams, SceneDescription, Surface};
+use radray::scene::{Camera, DirectMode, FinalGatherMode, Material, SceneDescription, Surface};
 use radray::trace::camera::PinholeCamera;
 use radray::trace::gather::{fill, Strata};
 use radray::trace::{RayCounts, TraceMode, Tracer};
@@ -39,37 +37,6 @@ fn cube_faces(wall: u32, ceiling: u32) -> Vec<Surface> {
         square(vec3(0.5, 0.5, 0.0), Vec3::X, Vec3::Y, 0.5, wall), // z = 0, facing +z
         square(h + vec3(0.0, 0.0, 0.5), Vec3::Y, Vec3::X, 0.5, wall), // z = 1, facing −z
     ]
-}
-
-struct Setup {
-    mesh: Mesh,
-    accel: Accel,
-    solution: Solution,
-    materials: Vec<Material>,
-}
-
-impl Setup {
-    /// A hand-made solution on `scene` meshed at `max_edge`.
-    fn hand_made(scene: &SceneDescription, max_edge: f32, exitance: impl Fn(&Mesh) -> (Vec<Vec3>, Vec<Vec3>)) -> Setup {
-        let mesh = Mesh::build(scene, max_edge);
-        let accel = Accel::build(&mesh.positions, &mesh.triangles);
-        let (b, direct) = exitance(&mesh);
-        let solution = solution(&mesh, b, direct);
-        Setup { mesh, accel, solution, materials: scene.materials.clone() }
-    }
-
-    /// Pass one as `radray render` runs it.
-    fn solved(scene: &SceneDescription) -> Setup {
-        let mut stats = RunStats::default();
-        let (mesh, solution) =
-            run::pass_one(scene, None, &RunPhotons::default(), &Progress::hidden(), &mut stats).unwrap();
-        let accel = Accel::build(&mesh.positions, &mesh.triangles);
-        Setup { mesh, accel, solution: (*solution).clone(), materials: scene.materials.clone() }
-    }
-
-    fn tracer(&self) -> Tracer<'_> {
-        Tracer::new(&self.mesh, &self.accel, &self.solution, &self.materials, &RenderParams::default()).unwrap()
-    }
 }
 
 /// The gathered indirect irradiance at (p, n) with about `rays` rays, from stream `seed`.

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use common::radray;
+use common::{radray, small_batch_job};
 use glam::Vec3;
 use radray::progress::{Progress, Verbosity};
 use radray::radiosity::hierarchical::{geometry_key, hierarchy_params, scene_fingerprint};
@@ -272,39 +272,14 @@ fn stats_record_links_elements_passes_and_peak_memory() {
 fn a_batch_reuses_a_hierarchical_solution_for_a_new_view() {
     let dir = tempfile::tempdir().unwrap();
     let s = scene_path("cornell_box.toml");
-    let s = s.display();
-    let jobs = format!(
-        r#"
-[[job]]
-scene = "{s}"
-output = "a.png"
-width = 16
-height = 16
-spp = 1
-quality = "preview"
-method = "hierarchical"
-
-[[job]]
-scene = "{s}"
-output = "b.png"
-width = 16
-height = 12
-spp = 1
-quality = "preview"
-method = "hierarchical"
-camera = {{ eye = [400.0, 300.0, -600.0] }}
-
-[[job]]
-scene = "{s}"
-output = "c.png"
-width = 16
-height = 16
-spp = 1
-quality = "preview"
-method = "hierarchical"
-materials = {{ light = {{ ke = [4.0, 8.0, 20.0] }} }}
-"#
-    );
+    let s = s.display().to_string();
+    let m = "method = \"hierarchical\"\n";
+    let jobs = [
+        small_batch_job(&s, "\"a.png\"", 16, m),
+        small_batch_job(&s, "\"b.png\"", 12, &format!("{m}camera = {{ eye = [400.0, 300.0, -600.0] }}")),
+        small_batch_job(&s, "\"c.png\"", 16, &format!("{m}materials = {{ light = {{ ke = [4.0, 8.0, 20.0] }} }}")),
+    ]
+    .concat();
     let jobs_path = dir.path().join("jobs.toml");
     std::fs::write(&jobs_path, jobs).unwrap();
     let out = radray(&["batch", jobs_path.to_str().unwrap()]);

@@ -14,6 +14,7 @@ use radray::radiosity::fingerprint::fingerprint;
 use radray::run::{self, RunStats};
 use radray::scene;
 use radray::trace::{RayCounts, TraceMode, Tracer};
+use radray::transport::cut_outs::OpaqueRay;
 use radray::transport::photons::RunPhotons;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -344,6 +345,36 @@ fn pass_one_sees_through_elements_that_are_mostly_cut_out_and_is_blocked_by_the_
             assert_eq!(direct, 0.0, "floor element {e} at {c} is under the opaque half");
         }
     }
+}
+
+/// The one rule every ray kind uses (camera, gather, shadow, highlight and photon rays): the closest
+/// opaque hit passes the cut-out half of the sheet and stops at its opaque half, and the shadow query
+/// agrees with it.
+#[test]
+fn every_ray_kind_shares_one_walk_through_cut_outs() {
+    let dir = sheet_scene();
+    let s = scene::load(&dir.path().join("scene.toml")).expect("scene loads");
+    let (mesh, _) = run::pass_one(&s, None, &RunPhotons::default(), &Progress::hidden(), &mut RunStats::default())
+        .expect("pass one");
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let ray = OpaqueRay { mesh: &mesh, accel: &accel, offset: 1e-4, spread_rad: 0.0 };
+    let material = |name: &str| s.materials.iter().position(|m| m.name == name).expect("material") as u32;
+    // From the floor at x = −0.5 to the lamp's centre: the ray crosses the sheet at x ≈ −0.25, in the
+    // hole, and reaches the lamp |(0.5, 0, 0.99)| away.
+    let from = Vec3::new(-0.5, 0.0, 0.01);
+    let to_lamp = Vec3::new(0.0, 0.0, 1.0) - from;
+    let (hit, distance) = ray.closest_hit(from, to_lamp.normalize(), f32::INFINITY).expect("lamp");
+    assert_eq!(hit.material, material("lamp"));
+    assert!((distance - to_lamp.length()).abs() < 1e-3, "{distance}");
+    assert!(ray.blocked(from, to_lamp.normalize(), 2.0), "the lamp itself blocks");
+    assert!(!ray.blocked(Vec3::new(-0.5, 0.0, 0.01), Vec3::Z, 0.9), "the hole lets the ray through");
+    // Under the opaque half the sheet at z = 0.5 stops it.
+    let (hit, distance) = ray.closest_hit(Vec3::new(0.5, 0.0, 0.01), Vec3::Z, f32::INFINITY).expect("sheet");
+    assert_eq!(hit.material, material("sheet"));
+    assert!((distance - 0.49).abs() < 1e-3, "{distance}");
+    assert!(ray.blocked(Vec3::new(0.5, 0.0, 0.01), Vec3::Z, 0.9));
+    // A t_max short of the lamp: nothing opaque on the way through the hole.
+    assert!(ray.closest_hit(Vec3::new(-0.5, 0.0, 0.01), Vec3::Z, 0.9).is_none());
 }
 
 #[test]

@@ -5,14 +5,13 @@ mod common;
 
 use std::f32::consts::PI;
 
-use common::{cornell_camera, emitter, glass, mirror, scene, solution, surface, z_quad};
+use common::{cornell_camera, emitter, glass, mirror, scene, solution, surface, z_quad, Setup};
 use glam::{vec3, Vec3};
 use radray::accel::Accel;
 use radray::film::Sampler;
 use radray::mesh::Mesh;
-use radray::radiosity::solution::Solution;
 use radray::rng::Pcg32;
-use radray::scene::{Camera, DirectMode, Material, RenderParams, SceneDescription, Surface};
+use radray::scene::{Camera, DirectMode, Material, RenderParams, Surface};
 use radray::trace::{PinholeCamera, RayCounts, TraceMode, Tracer};
 
 // ---------------------------------------------------------------------------------------------
@@ -36,27 +35,6 @@ fn random_unit(rng: &mut Pcg32) -> Vec3 {
 /// Element exitance for a scene whose surfaces are single elements: `per_surface[s]` for surface s.
 fn per_surface(mesh: &Mesh, values: &[Vec3]) -> Vec<Vec3> {
     mesh.elements.surface.iter().map(|&s| values[s as usize]).collect()
-}
-
-struct Setup {
-    mesh: Mesh,
-    accel: Accel,
-    solution: Solution,
-    materials: Vec<Material>,
-}
-
-impl Setup {
-    fn new(scene: &SceneDescription, max_edge: f32, exitance: impl Fn(&Mesh) -> (Vec<Vec3>, Vec<Vec3>)) -> Setup {
-        let mesh = Mesh::build(scene, max_edge);
-        let accel = Accel::build(&mesh.positions, &mesh.triangles);
-        let (b, bd) = exitance(&mesh);
-        let solution = solution(&mesh, b, bd);
-        Setup { mesh, accel, solution, materials: scene.materials.clone() }
-    }
-
-    fn tracer(&self, params: &RenderParams) -> Tracer<'_> {
-        Tracer::new(&self.mesh, &self.accel, &self.solution, &self.materials, params).expect("consistent inputs")
-    }
 }
 
 fn trace(tracer: &Tracer, origin: Vec3, dir: Vec3, mode: TraceMode) -> Vec3 {
@@ -125,13 +103,13 @@ fn vertical_field_of_view_spans_the_film_height() {
 fn emitter_seen_directly_is_exactly_ke_in_every_mode() {
     let ke = vec3(17.0, 12.0, 4.0);
     let scene = scene(vec![emitter("light", ke)], vec![z_quad(0.0, 1.0, true, 0, false)]);
-    let setup = Setup::new(&scene, 0.5, |mesh| {
+    let setup = Setup::hand_made(&scene, 0.5, |mesh| {
         let e = mesh.elements.emission.clone();
         (e, vec![Vec3::ZERO; mesh.elements.len()])
     });
     for direct in [DirectMode::Radiosity, DirectMode::Pixel] {
         let params = RenderParams { direct, ..RenderParams::default() };
-        let tracer = setup.tracer(&params);
+        let tracer = setup.tracer_with(&params);
         for mode in [TraceMode::Final, TraceMode::Radiosity] {
             let l = trace(&tracer, vec3(0.3, -0.2, 2.0), vec3(-0.1, 0.2, -1.0), mode);
             // E = π·Ke then B/π: two f32 roundings, ≤ 2 ulps (2.4e-7 relative).
@@ -147,13 +125,13 @@ fn back_face_of_one_sided_surface_is_black_and_two_sided_shows_its_back() {
     let back_exitance = vec3(0.5, 0.25, 0.125);
     for two_sided in [false, true] {
         let scene = scene(vec![white.clone()], vec![z_quad(0.0, 1.0, true, 0, two_sided)]);
-        let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+        let setup = Setup::hand_made(&scene, f32::INFINITY, |mesh| {
             // Element 0 is the front side, element 1 (if any) the back side.
             let b: Vec<Vec3> =
                 (0..mesh.elements.len()).map(|e| if e == 0 { front_exitance } else { back_exitance }).collect();
             (b, vec![Vec3::ZERO; mesh.elements.len()])
         });
-        let tracer = setup.tracer(&RenderParams::default());
+        let tracer = setup.tracer();
         for mode in [TraceMode::Final, TraceMode::Radiosity] {
             let front = trace(&tracer, vec3(0.1, 0.1, 1.0), Vec3::NEG_Z, mode);
             let back = trace(&tracer, vec3(0.1, 0.1, -1.0), Vec3::Z, mode);
@@ -180,10 +158,10 @@ fn mirror_shows_ks_times_the_reflected_surface() {
         false,
     );
     let scene = scene(vec![mirror, wall], vec![z_quad(0.0, 10.0, true, 0, false), wall_surface]);
-    let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+    let setup = Setup::hand_made(&scene, f32::INFINITY, |mesh| {
         (per_surface(mesh, &[Vec3::ZERO, wall_radiance * PI]), vec![Vec3::ZERO; mesh.elements.len()])
     });
-    let tracer = setup.tracer(&RenderParams::default());
+    let tracer = setup.tracer();
     let dir = vec3(1.0, 0.0, -1.0).normalize();
     let l = trace(&tracer, vec3(0.0, 0.0, 1.0), dir, TraceMode::Final);
     // 0.9 × B/π: three f32 roundings.
@@ -207,11 +185,11 @@ fn glass_slab_transmits_the_multiple_reflection_series() {
             z_quad(-1.0, 10.0, true, 1, false),
         ],
     );
-    let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+    let setup = Setup::hand_made(&scene, f32::INFINITY, |mesh| {
         (mesh.elements.emission.clone(), vec![Vec3::ZERO; mesh.elements.len()])
     });
     let params = RenderParams::default();
-    let tracer = setup.tracer(&params);
+    let tracer = setup.tracer_with(&params);
     let l = trace(&tracer, vec3(0.5, 0.5, 1.0), Vec3::NEG_Z, TraceMode::Final);
     // Normal incidence: R = 0.04 per face; light crossing the slab after 2k internal reflections
     // carries (1−R)²R^(2k), in all (1−R)²/(1−R²). With max_depth 8 and min_throughput 1e-3 the tracer
@@ -241,11 +219,11 @@ fn total_internal_reflection_keeps_light_inside_glass() {
             z_quad(1.0, 50.0, false, 1, false),
         ],
     );
-    let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+    let setup = Setup::hand_made(&scene, f32::INFINITY, |mesh| {
         (mesh.elements.emission.clone(), vec![Vec3::ZERO; mesh.elements.len()])
     });
     let params = RenderParams { max_depth: 1, ..RenderParams::default() };
-    let tracer = setup.tracer(&params);
+    let tracer = setup.tracer_with(&params);
     // From inside the slab at 60° from the normal, upwards: TIR at z = 0; one bounce allowed, so the
     // reflected ray hits the slab's lower face and nothing reaches the emitter above.
     let theta = 60f32.to_radians();
@@ -274,12 +252,12 @@ fn diffuse_only_scene_renders_the_same_in_both_modes() {
     // Listed clockwise seen from inside: reverse them so that they face into the cube.
     let surfaces: Vec<Surface> = faces.into_iter().map(|[a, b, c, d]| surface([a, d, c, b], 0, false)).collect();
     let scene = scene(vec![white], surfaces);
-    let setup = Setup::new(&scene, 0.25, |mesh| {
+    let setup = Setup::hand_made(&scene, 0.25, |mesh| {
         let b = mesh.elements.centre.iter().map(|c| *c + Vec3::splat(0.5)).collect();
         (b, vec![Vec3::ZERO; mesh.elements.len()])
     });
     let params = RenderParams::default();
-    let tracer = setup.tracer(&params);
+    let tracer = setup.tracer_with(&params);
     for (e, &n) in setup.mesh.elements.normal.iter().enumerate() {
         assert!(n.dot(Vec3::splat(0.5) - setup.mesh.elements.centre[e]) > 0.0, "every face looks into the cube");
     }
@@ -309,14 +287,14 @@ fn pixel_direct_light_matches_the_radiosity_direct_part_on_average() {
     let scene = scene(vec![Material::diffuse("floor", Vec3::splat(rho)), emitter("light", ke)], vec![floor, light]);
     let form_factor = 0.415_253_28f32;
     let floor_direct = rho * form_factor * ke * PI;
-    let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+    let setup = Setup::hand_made(&scene, f32::INFINITY, |mesh| {
         let b = per_surface(mesh, &[floor_direct, ke * PI]);
         let bd = per_surface(mesh, &[floor_direct, Vec3::ZERO]);
         (b, bd)
     });
     assert_eq!(setup.mesh.elements.len(), 2);
     let params = RenderParams { direct: DirectMode::Pixel, light_samples: 4, ..RenderParams::default() };
-    let tracer = setup.tracer(&params);
+    let tracer = setup.tracer_with(&params);
     assert!((tracer.emitter_area() - 4.0).abs() < 1e-6);
 
     // Average the per-pixel estimate over uniformly spread points of the floor.
@@ -363,11 +341,11 @@ fn pixel_direct_light_is_shadowed_by_a_blocker() {
         ],
         vec![floor, light, blocker],
     );
-    let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+    let setup = Setup::hand_made(&scene, f32::INFINITY, |mesh| {
         (per_surface(mesh, &[Vec3::ZERO, ke * PI, Vec3::ZERO]), vec![Vec3::ZERO; mesh.elements.len()])
     });
     let params = RenderParams { direct: DirectMode::Pixel, light_samples: 8, ..RenderParams::default() };
-    let tracer = setup.tracer(&params);
+    let tracer = setup.tracer_with(&params);
     let l = trace(&tracer, vec3(0.0, 0.25, 0.0), Vec3::NEG_Y, TraceMode::Final);
     assert_eq!(l, Vec3::ZERO);
 }
@@ -387,11 +365,11 @@ fn phong_highlight_follows_its_normalisation() {
     let floor = surface([vec3(-1., 0., -1.), vec3(-1., 0., 1.), vec3(1., 0., 1.), vec3(1., 0., -1.)], 0, false);
     let light = surface([vec3(-s, 1., -s), vec3(s, 1., -s), vec3(s, 1., s), vec3(-s, 1., s)], 1, false);
     let scene = scene(vec![glossy, emitter("light", Vec3::ONE)], vec![floor, light]);
-    let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+    let setup = Setup::hand_made(&scene, f32::INFINITY, |mesh| {
         (per_surface(mesh, &[Vec3::ZERO, Vec3::splat(PI)]), vec![Vec3::ZERO; mesh.elements.len()])
     });
     let params = RenderParams { light_samples: 16, ..RenderParams::default() };
-    let tracer = setup.tracer(&params);
+    let tracer = setup.tracer_with(&params);
     let alpha = 10f32.to_radians();
     let dir = vec3(alpha.sin(), -alpha.cos(), 0.0);
     let l = trace(&tracer, -0.5 * dir, dir, TraceMode::Final);
@@ -432,13 +410,13 @@ fn shading_normals_bend_mirror_rays() {
     let wall_surface =
         surface([vec3(1.0, -10.0, 5.0), vec3(1.0, 10.0, 5.0), vec3(10.0, 10.0, 5.0), vec3(10.0, -10.0, 5.0)], 1, false);
     let scene = scene(vec![mirror, wall], vec![mirror_surface, wall_surface]);
-    let setup = Setup::new(&scene, f32::INFINITY, |mesh| {
+    let setup = Setup::hand_made(&scene, f32::INFINITY, |mesh| {
         (per_surface(mesh, &[Vec3::ZERO, Vec3::splat(PI)]), vec![Vec3::ZERO; mesh.elements.len()])
     });
     assert!(setup.mesh.elements.normal[1].z < 0.0, "the wall faces the mirror");
     let params = RenderParams::default();
-    let flat = setup.tracer(&params);
-    let smooth = setup.tracer(&params).with_shading_normals(&scene.surfaces);
+    let flat = setup.tracer_with(&params);
+    let smooth = setup.tracer_with(&params).with_shading_normals(&scene.surfaces);
     let origin = vec3(0.0, 0.0, 1.0);
     assert_eq!(trace(&flat, origin, Vec3::NEG_Z, TraceMode::Final), Vec3::ZERO);
     // 0.9 × the wall's radiance 1, a few f32 roundings.

@@ -6,11 +6,11 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::cut_outs;
 use super::whitted::RayCounts;
 use crate::accel::Accel;
 use crate::film::Sampler;
 use crate::mesh::Mesh;
+use crate::transport::cut_outs::OpaqueRay;
 use crate::transport::emitters::Emitters;
 
 /// The direct light at a diffuse hit: irradiance E_direct and the highlight integral (see
@@ -74,6 +74,11 @@ impl<'a> DirectLight<'a> {
         DirectLight { mesh, accel, emitters, samples, offset }
     }
 
+    /// Shadow and highlight rays pass cut-outs, reading their finest texels.
+    fn opaque_ray(&self) -> OpaqueRay<'a> {
+        OpaqueRay { mesh: self.mesh, accel: self.accel, offset: self.offset, spread_rad: 0.0 }
+    }
+
     pub fn emitters(&self) -> &Emitters {
         &self.emitters
     }
@@ -132,7 +137,7 @@ impl<'a> DirectLight<'a> {
                 continue;
             };
             counts.shadow += 1;
-            if cut_outs::shadow_blocked(mesh, self.accel, self.offset, origin, w, dist - self.offset) {
+            if self.opaque_ray().blocked(origin, w, dist - self.offset) {
                 continue;
             }
             let contribution = emitted_radiance * (cos_here * cos_light / dist2 * sample.inverse_density / count);
@@ -184,7 +189,7 @@ impl<'a> DirectLight<'a> {
                 continue;
             }
             counts.shadow += 1;
-            let Some(hit) = self.accel.closest_hit(origin, w, 0.0, f32::INFINITY) else {
+            let Some((hit, dist)) = self.opaque_ray().closest_hit(origin, w, f32::INFINITY) else {
                 continue;
             };
             let Some((emitted_radiance, cos_light)) = self.emitted_towards(hit.triangle as usize, w) else {
@@ -194,7 +199,6 @@ impl<'a> DirectLight<'a> {
             if p_lobe <= 0.0 {
                 continue;
             }
-            let dist = hit.t;
             let p_light = self.emitters.area_density(hit.triangle) * dist * dist / cos_light;
             let weight = power_heuristic(count, p_lobe, count, p_light);
             // L_e cos θ cosⁿα / p_B = L_e cos θ · 2π/(n + 1).

@@ -7,7 +7,6 @@
 pub mod back_faces;
 pub mod camera;
 pub mod caustics;
-pub mod cut_outs;
 pub mod diffuse;
 pub mod direct_light;
 pub mod gather;

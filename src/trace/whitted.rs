@@ -5,19 +5,20 @@
 use std::f32::consts::PI;
 use std::ops::AddAssign;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::caustics::CausticMap;
-use super::cut_outs::{self, MAX_CUTOUT_CROSSINGS};
 use super::diffuse::{Diffuse, DiffuseEstimator};
 use super::direct_light::{DirectEstimate, DirectLight};
 use super::gather::FinalGather;
 use super::parts::{RadianceParts, Record};
 use crate::accel::Accel;
 use crate::film::Sampler;
+use crate::material::MaterialMaps;
 use crate::mesh::Mesh;
 use crate::radiosity::Solution;
 use crate::scene::{Material, RenderParams, Surface};
+use crate::transport::cut_outs::OpaqueRay;
 use crate::transport::emitters::Emitters;
 use crate::transport::hit::{ray_offset, scene_scale};
 use crate::transport::optics::reflect;
@@ -179,30 +180,35 @@ impl<'a> Tracer<'a> {
         self
     }
 
-    /// Texel albedo ρ(x) of the diffuse term at `hit`, reached after `distance` along the ray, or
-    /// `None` when the material has no `map_Kd` or the surface no uv. (Pass two's texture ratio
-    /// ρ(x)/ρ̄ₑ is applied through the interpolated irradiance, see `Diffuse::radiance`.) The lookup is trilinear over a footprint of distance·pixel angle scene units,
+    /// A textured quantity at `hit`, reached after `distance` along the ray: `lookup(maps, uv,
+    /// footprint_uv)` when `has_map(maps)`, or `None` when the material lacks that map or the surface
+    /// has no uv. The lookup is trilinear over a footprint of distance·pixel angle scene units,
     /// converted to uv units by the triangle's uv-per-length (`SurfaceHit::uv_per_length`).
-    fn texel_albedo_at(&self, hit: &SurfaceHit, distance: f32) -> Option<Vec3> {
+    fn texel_at<T>(
+        &self,
+        hit: &SurfaceHit,
+        distance: f32,
+        has_map: impl Fn(&MaterialMaps) -> bool,
+        lookup: impl Fn(&MaterialMaps, Vec2, f32) -> T,
+    ) -> Option<T> {
         let mesh = self.mesh;
-        let maps = mesh.textures.maps(hit.material).filter(|m| m.has_diffuse_texture())?;
+        let maps = mesh.textures.maps(hit.material).filter(|m| has_map(m))?;
         if !mesh.surface_has_uv.get(hit.surface as usize).copied().unwrap_or(false) {
             return None;
         }
         let footprint_uv = distance * self.pixel_angle_rad * hit.uv_per_length(mesh);
-        Some(maps.albedo_at(hit.uv, footprint_uv))
+        Some(lookup(maps, hit.uv, footprint_uv))
     }
 
-    /// Emitted radiance Ke·t(uv) at `hit` of a material with `map_Ke` (trilinear over the same footprint
-    /// as `texel_albedo_at`), or `None` without an emission map or without uv.
+    /// Texel albedo ρ(x) of the diffuse term at `hit` (`texel_at` with `map_Kd`). Pass two's texture
+    /// ratio ρ(x)/ρ̄ₑ is applied through the interpolated irradiance, see `Diffuse::radiance`.
+    fn texel_albedo_at(&self, hit: &SurfaceHit, distance: f32) -> Option<Vec3> {
+        self.texel_at(hit, distance, MaterialMaps::has_diffuse_texture, MaterialMaps::albedo_at)
+    }
+
+    /// Emitted radiance Ke·t(uv) at `hit` (`texel_at` with `map_Ke`).
     fn texel_emission_at(&self, hit: &SurfaceHit, distance: f32) -> Option<Vec3> {
-        let mesh = self.mesh;
-        let maps = mesh.textures.maps(hit.material).filter(|m| m.has_emission_texture())?;
-        if !mesh.surface_has_uv.get(hit.surface as usize).copied().unwrap_or(false) {
-            return None;
-        }
-        let footprint_uv = distance * self.pixel_angle_rad * hit.uv_per_length(mesh);
-        Some(maps.emission_at(hit.uv, footprint_uv))
+        self.texel_at(hit, distance, MaterialMaps::has_emission_texture, MaterialMaps::emission_at)
     }
 
     /// Takes the diffuse term's indirect light from `gather` in `TraceMode::Final` (see
@@ -232,28 +238,12 @@ impl<'a> Tracer<'a> {
         self.params.min_throughput
     }
 
-    /// The closest hit along a ray that is not cut out: surfaces whose opacity map reads below ½ at
-    /// the hit are passed through (at most `MAX_CUTOUT_CROSSINGS` of them). Returns the hit and the
-    /// distance from `origin`.
+    /// The closest hit along a ray that is not cut out (`transport::cut_outs`, with this tracer's pixel
+    /// footprint), and its distance from `origin`.
     pub fn closest_opaque_hit(&self, origin: Vec3, dir: Vec3) -> Option<(SurfaceHit, f32)> {
-        let mesh = self.mesh;
-        let mut from = origin;
-        let mut travelled = 0.0f32;
-        for _ in 0..=MAX_CUTOUT_CROSSINGS {
-            let hit = self.accel.closest_hit(from, dir, 0.0, f32::INFINITY)?;
-            let surface_hit = SurfaceHit::new(mesh, &hit, dir);
-            let distance = travelled + hit.t;
-            if !self.is_cut_out(&surface_hit, distance * self.pixel_angle_rad) {
-                return Some((surface_hit, distance));
-            }
-            from = surface_hit.position + dir * self.offset;
-            travelled = distance + self.offset;
-        }
-        None
-    }
-
-    fn is_cut_out(&self, hit: &SurfaceHit, footprint: f32) -> bool {
-        cut_outs::is_cut_out(self.mesh, hit, footprint)
+        let ray =
+            OpaqueRay { mesh: self.mesh, accel: self.accel, offset: self.offset, spread_rad: self.pixel_angle_rad };
+        ray.closest_hit(origin, dir, f32::INFINITY)
     }
 
     /// Builds a caustic map from the run's `photons` (`transport::photons`, the ones pass one's

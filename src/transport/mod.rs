@@ -1,9 +1,10 @@
 //! Light transport shared by both passes: where a ray meets a surface (`hit`), the specular rules of
 //! mirrors and glass (`scatter`, with the pure formulas in `optics`), choosing points on the emitters
-//! (`emitters`), and the photons traced once per run from the emitters through specular surfaces
+//! (`emitters`), rays through cut-out textures (`cut_outs`), and the photons traced once per run from the emitters through specular surfaces
 //! (`photons`). Pass one (radiosity) and pass two (trace) both read from here; nothing here reads from
 //! either pass.
 
+pub mod cut_outs;
 pub mod emitters;
 pub mod hit;
 pub mod optics;

@@ -6,8 +6,9 @@ use glam::Vec3;
 use std::collections::HashMap;
 use std::f32::consts::PI;
 
+use super::cut_outs::OpaqueRay;
 use super::emitters::PhotonSources;
-use super::hit::{ray_offset, scene_scale, SurfaceHit};
+use super::hit::{ray_offset, scene_scale};
 use super::scatter::{carries, scatter};
 use crate::accel::Accel;
 use crate::mesh::{Mesh, NONE};
@@ -182,14 +183,15 @@ impl Follower<'_> {
         let mut rays = 0;
         for depth in 0..=MAX_DEPTH {
             rays += 1;
-            let Some(hit) = self.accel.closest_hit(origin, dir, 0.0, f32::INFINITY) else {
+            // Photons pass cut-outs as every other ray does (at their finest texels).
+            let through_cut_outs = OpaqueRay { mesh, accel: self.accel, offset, spread_rad: 0.0 };
+            let Some((hit, _)) = through_cut_outs.closest_hit(origin, dir, f32::INFINITY) else {
                 break;
             };
             let front_element = mesh.triangle_element[hit.triangle as usize] as usize;
             if depth == 0 && self.group[front_element] != group_wanted {
                 break;
             }
-            let hit = SurfaceHit::new(mesh, &hit, dir);
             let Some(material) = self.materials.get(hit.material as usize) else {
                 break;
             };

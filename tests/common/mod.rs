@@ -9,11 +9,16 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 use glam::{vec3, DVec3, Vec3};
+use radray::accel::Accel;
 use radray::mesh::Mesh;
+use radray::progress::Progress;
 use radray::radiosity::solution::{Solution, SolveStats};
+use radray::run::{self, RunStats};
 use radray::scene::{
     Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SolverKind, SourceLoc, Surface,
 };
+use radray::trace::Tracer;
+use radray::transport::photons::RunPhotons;
 
 /// Runs the `radray` binary built for these tests with `args`.
 pub fn radray(args: &[&str]) -> Output {
@@ -162,4 +167,56 @@ pub fn json_vec3(v: &serde_json::Value) -> Vec3 {
 /// A validation case's vertex list.
 pub fn json_polygon(v: &serde_json::Value) -> Vec<Vec3> {
     v.as_array().expect("a vertex list").iter().map(json_vec3).collect()
+}
+
+/// One `[[job]]` table of a batch file: a tiny preview render of `scene` to `output` (a TOML value,
+/// e.g. `"a.png"` or `["a.png", "a.exr"]`), 16 pixels wide and `height` high, 1 spp, plus the
+/// `extra` key lines.
+pub fn small_batch_job(scene: &str, output: &str, height: u32, extra: &str) -> String {
+    format!(
+        "[[job]]\nscene = \"{scene}\"\noutput = {output}\nwidth = 16\nheight = {height}\nspp = 1\n\
+         quality = \"preview\"\n{extra}\n"
+    )
+}
+
+/// A scene ready for pass two: its mesh, BVH, a radiosity solution and the materials.
+pub struct Setup {
+    pub mesh: Mesh,
+    pub accel: Accel,
+    pub solution: Solution,
+    pub materials: Vec<Material>,
+}
+
+impl Setup {
+    /// A hand-made solution on `scene` meshed at `max_edge`: `exitance(mesh)` gives each element's
+    /// exitance B and its direct part.
+    pub fn hand_made(
+        scene: &SceneDescription,
+        max_edge: f32,
+        exitance: impl Fn(&Mesh) -> (Vec<Vec3>, Vec<Vec3>),
+    ) -> Setup {
+        let mesh = Mesh::build(scene, max_edge);
+        let accel = Accel::build(&mesh.positions, &mesh.triangles);
+        let (b, direct) = exitance(&mesh);
+        let solution = solution(&mesh, b, direct);
+        Setup { mesh, accel, solution, materials: scene.materials.clone() }
+    }
+
+    /// Pass one as `radray render` runs it.
+    pub fn solved(scene: &SceneDescription) -> Setup {
+        let mut stats = RunStats::default();
+        let (mesh, solution) =
+            run::pass_one(scene, None, &RunPhotons::default(), &Progress::hidden(), &mut stats).unwrap();
+        let accel = Accel::build(&mesh.positions, &mesh.triangles);
+        Setup { mesh, accel, solution: (*solution).clone(), materials: scene.materials.clone() }
+    }
+
+    /// The tracer with the default render settings.
+    pub fn tracer(&self) -> Tracer<'_> {
+        self.tracer_with(&RenderParams::default())
+    }
+
+    pub fn tracer_with(&self, params: &RenderParams) -> Tracer<'_> {
+        Tracer::new(&self.mesh, &self.accel, &self.solution, &self.materials, params).expect("consistent inputs")
+    }
 }

@@ -143,14 +143,6 @@ impl ItemBuffer {
         normal: Vec3,
         centre: Vec3,
     ) {
-        if indices.len() < 3 {
-            return;
-        }
-        if indices.len() > MAX_INPUT_CORNERS {
-            let corners: Vec<Vec3> = indices.iter().map(|&v| positions[v as usize]).collect();
-            self.add_polygon(hc, item, &corners, normal, centre);
-            return;
-        }
         self.add_indexed(hc, item, None, positions, indices, normal, centre);
     }
 
@@ -169,25 +161,11 @@ impl ItemBuffer {
         normal: Vec3,
         centre: Vec3,
     ) {
-        if indices.len() < 3 {
-            return;
-        }
-        if indices.len() > MAX_INPUT_CORNERS {
-            let plane_offset = (centre - self.frame.eye).dot(normal);
-            let corners: Vec<Vec3> = indices.iter().map(|&v| positions[v as usize]).collect();
-            if plane_offset > 0.0 {
-                let reversed: Vec<Vec3> = corners.iter().rev().copied().collect();
-                self.add_polygon(hc, occluder, &reversed, -normal, centre);
-            } else {
-                self.add_polygon(hc, item, &corners, normal, centre);
-            }
-            return;
-        }
         self.add_indexed(hc, item, Some(occluder), positions, indices, normal, centre);
     }
 
     /// The shared body of the indexed adds: back-facing polygons are culled, or drawn (corners reversed,
-    /// so that they face the eye) as `occluder` when one is given.
+    /// so that they face the eye) as `occluder` when one is given. Degenerate polygons are skipped.
     #[allow(clippy::too_many_arguments)]
     fn add_indexed(
         &mut self,
@@ -199,6 +177,21 @@ impl ItemBuffer {
         normal: Vec3,
         centre: Vec3,
     ) {
+        if indices.len() < 3 {
+            return;
+        }
+        if indices.len() > MAX_INPUT_CORNERS {
+            // Too many corners for the stack arrays: the unindexed path, which fans them into triangles.
+            let corners: Vec<Vec3> = indices.iter().map(|&v| positions[v as usize]).collect();
+            match occluder {
+                Some(occluder) if (centre - self.frame.eye).dot(normal) > 0.0 => {
+                    let reversed: Vec<Vec3> = corners.iter().rev().copied().collect();
+                    self.add_polygon(hc, occluder, &reversed, -normal, centre);
+                }
+                _ => self.add_polygon(hc, item, &corners, normal, centre),
+            }
+            return;
+        }
         debug_assert_eq!(self.inverse_depth.len(), hc.pixel_count(), "begin() was called with another hemicube");
         let mut plane_offset = (centre - self.frame.eye).dot(normal);
         let mut normal = normal;
