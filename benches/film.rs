@@ -24,6 +24,7 @@ fn film_overhead(c: &mut Criterion) {
             filter,
             filter_radius_px: radius_px,
             adaptive_threshold: None,
+            adaptive_error: None,
             adaptive_max_samples: 16,
             seed: 1,
             exposure: Default::default(),

@@ -824,7 +824,7 @@ Whole-process figures of the final image (`--direct pixel`) from the time-to-err
 
 {bench_text}
 """
-    (DOCS / "accuracy.md").write_text(accuracy)
+    (DOCS / "accuracy.md").write_text(accuracy + kept_sections(DOCS / "accuracy.md"))
     (DOCS / "performance.md").write_text(performance + kept_sections(DOCS / "performance.md"))
     if ARGS.readme:
         update_readme(cells)

@@ -26,6 +26,7 @@ fn settings(
         filter,
         filter_radius_px: radius_px,
         adaptive_threshold: None,
+        adaptive_error: None,
         adaptive_max_samples: samples_per_pixel,
         seed: 42,
         exposure: Default::default(),
@@ -85,10 +86,8 @@ fn normalised_weights_of_a_pixel_sum_to_one() {
     for kind in ALL_FILTERS {
         for spp in [1u32, 7, 16, 64] {
             let filter = FilterSampler::new(kind, 2.0);
-            let mut sampler = Sampler::independent(3, spp as u64);
-            let (columns, rows) = film::stratum_grid(spp);
-            let mut points = Vec::new();
-            film::multi_jittered(columns, rows, &mut sampler, &mut points);
+            let mut sampler = Sampler::pixel(3, spp as u64);
+            let points: Vec<[f32; 2]> = (0..spp).map(|i| sampler.film_position(i)).collect();
             let weights: Vec<f64> = points.iter().map(|u| filter.sample(*u).weight as f64).collect();
             let total: f64 = weights.iter().sum();
             assert!(total > 0.0, "{kind:?} spp {spp}: Σw = {total}");
@@ -106,29 +105,56 @@ fn normalised_weights_of_a_pixel_sum_to_one() {
 // Stratification
 // ---------------------------------------------------------------------------------------------------
 
-#[test]
-fn multi_jittered_puts_exactly_one_sample_in_each_stratum() {
-    for count in [1u32, 2, 4, 7, 8, 12, 16, 64] {
-        let (columns, rows) = film::stratum_grid(count);
-        assert_eq!(columns * rows, count);
-        let mut sampler = Sampler::independent(9, count as u64);
-        let mut points = Vec::new();
-        film::multi_jittered(columns, rows, &mut sampler, &mut points);
-        assert_eq!(points.len(), count as usize);
-        let n = count as usize;
-        let mut cells = vec![0; n];
-        let (mut x_strata, mut y_strata) = (vec![0; n], vec![0; n]);
-        for [x, y] in &points {
+/// True if the points put exactly one point in each elementary interval of area 1/len: every
+/// 2^a × 2^(m−a) grid, len = 2^m (a (0, m, 2)-net; a = 0 and a = m are the N-rooks strata).
+fn is_a_net(points: &[[f32; 2]]) -> bool {
+    let m = points.len().trailing_zeros();
+    assert_eq!(1 << m, points.len());
+    (0..=m).all(|a| {
+        let (nx, ny) = (1usize << a, 1usize << (m - a));
+        let mut seen = vec![false; nx * ny];
+        points.iter().all(|[x, y]| {
             assert!((0.0..1.0).contains(x) && (0.0..1.0).contains(y), "{x} {y}");
-            let (i, j) = ((x * columns as f32) as usize, (y * rows as f32) as usize);
-            cells[j * columns as usize + i] += 1;
-            x_strata[(x * n as f32) as usize] += 1;
-            y_strata[(y * n as f32) as usize] += 1;
-        }
-        assert!(cells.iter().all(|&c| c == 1), "count {count}: cells {cells:?}");
-        assert!(x_strata.iter().all(|&c| c == 1), "count {count}: x strata {x_strata:?}");
-        assert!(y_strata.iter().all(|&c| c == 1), "count {count}: y strata {y_strata:?}");
+            let cell = (y * ny as f32) as usize * nx + (x * nx as f32) as usize;
+            !std::mem::replace(&mut seen[cell], true)
+        })
+    })
+}
+
+#[test]
+fn film_positions_of_a_pixel_are_a_net_at_every_power_of_two() {
+    // A pixel's first 16 samples (the default base count), its first 64 (with adaptive samples),
+    // and the adaptive block 16..32 alone: each set is stratified in every elementary interval.
+    for pixel in 0..50u64 {
+        let mut sampler = Sampler::pixel(7, pixel);
+        let points: Vec<[f32; 2]> = (0..64).map(|i| sampler.film_position(i)).collect();
+        assert!(is_a_net(&points[..16]), "pixel {pixel}: first 16");
+        assert!(is_a_net(&points[16..32]), "pixel {pixel}: 16..32");
+        assert!(is_a_net(&points), "pixel {pixel}: first 64");
+        // The adaptive sampler continues the same positions.
+        let mut adaptive = Sampler::pixel_adaptive(7, pixel);
+        assert_eq!(adaptive.film_position(40), points[40]);
     }
+    // Different pixels get different (scrambled and shuffled) positions.
+    let first = |pixel| Sampler::pixel(7, pixel).film_position(0);
+    assert_ne!(first(0), first(1));
+}
+
+#[test]
+fn film_positions_are_uniform_over_pixels() {
+    // Sample 5 of 20 000 pixels: the means of x, y and xy are those of the uniform square, 1/2, 1/2,
+    // 1/4, within 5 standard errors (σ/√n ≈ 0.002 for x and y; xy's σ is smaller).
+    let n = 20_000u64;
+    let (mut sx, mut sy, mut sxy) = (0.0f64, 0.0f64, 0.0f64);
+    for pixel in 0..n {
+        let [x, y] = Sampler::pixel(1, pixel).film_position(5);
+        sx += x as f64;
+        sy += y as f64;
+        sxy += (x * y) as f64;
+    }
+    let tol = 5.0 * (1.0f64 / 12.0 / n as f64).sqrt();
+    let n = n as f64;
+    assert!((sx / n - 0.5).abs() < tol && (sy / n - 0.5).abs() < tol && (sxy / n - 0.25).abs() < tol);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -188,6 +214,7 @@ fn images_are_bit_identical_with_one_and_two_threads() {
     for kind in ALL_FILTERS {
         let mut s = settings(37, 29, 8, kind, 1.5);
         s.adaptive_threshold = Some(0.3);
+        s.adaptive_error = Some(0.2);
         s.adaptive_max_samples = 24;
         let (a, stats_a) = render_in_pool(1, &s);
         let (b, stats_b) = render_in_pool(2, &s);
@@ -232,14 +259,63 @@ fn adaptive_supersampling_spends_extra_samples_only_at_edges() {
             let expected = if x == 5 { 16 } else { 4 };
             assert_eq!(calls[(y * width + x) as usize], expected, "pixel ({x}, {y})");
         }
-        // Coverage 0.3 of radiance 2.0. The base batch (4) and the extra batch (12) are each N-rook
-        // stratified by themselves, so their coverage errors are below 1/4 and 1/12; weighted by their
-        // shares 4/16 and 12/16 that is below 1/16 + 1/16 = 1/8, i.e. 2.0/8 in radiance.
-        assert!((image.get(5, y).x - 0.6).abs() < 2.0 / 8.0, "{}", image.get(5, y).x);
+        // Coverage 0.3 of radiance 2.0. The base and adaptive samples together are the pixel's first 16
+        // film positions, N-rook stratified (one in each 1/16 of x): all but the stratum holding the
+        // edge are classified exactly, so the coverage error is below 1/16, i.e. 2.0/16 in radiance.
+        assert!((image.get(5, y).x - 0.6).abs() < 2.0 / 16.0, "{}", image.get(5, y).x);
     }
     assert_eq!(stats.adaptive_pixels, height as u64);
     assert_eq!(stats.adaptive_extra_samples, height as u64 * 12);
     assert_eq!(stats.samples, (width * height * 4) as u64 + height as u64 * 12);
+}
+
+#[test]
+fn one_sample_error_is_the_swing_over_n_relative_to_the_pixel() {
+    // A dark pixel (Y = 0.3) next to an emitter of luminance 24 seen by a neighbour, 16 samples:
+    // (24 − 0.3) / (16·√(0.3² + 0.01)) = 23.7 / (16·0.316228) = 4.684.
+    assert!((film::one_sample_error(0.3, 0.3, 24.0, 16) - 4.684).abs() < 1e-3);
+    // The emitter's own pixel beside the dark one: (24 − 0.3) / (16·√(24² + 0.01)) = 0.0617.
+    assert!((film::one_sample_error(24.0, 0.3, 24.0, 16) - 0.0617).abs() < 1e-4);
+    assert_eq!(film::one_sample_error(0.5, 0.5, 0.5, 16), 0.0);
+    assert_eq!(film::one_sample_error(0.5, 0.0, 9.0, 0), 0.0);
+}
+
+#[test]
+fn adaptive_error_supersamples_the_dark_side_of_a_thin_emitter_border() {
+    // An emitter of radiance 24 left of x = 5.02 on a background of 0.3. Pixel column 5 is covered
+    // 2%: its true value is 0.02·24 + 0.98·0.3 = 0.774, and 16 N-rook samples hit the emitter 0 or 1
+    // times (0.3 or 1.78). Its neighbours in column 4 see 24, so one_sample_error ≈ 4.7 > 0.25 asks for
+    // more samples; column 4 (0.06) and the uniform columns do not. Column 6 may: its neighbour in
+    // column 5 saw 24 if one of its samples hit.
+    let (width, height) = (12u32, 9u32);
+    let mut s = settings(width, height, 16, FilterKind::Box, 0.5);
+    s.adaptive_error = Some(0.25);
+    s.adaptive_max_samples = 256;
+    let (image, stats, counts) = film::render_with(
+        &s,
+        || vec![0u32; (width * height) as usize],
+        |calls: &mut Vec<u32>, x, y, _| {
+            calls[(y as u32 * width + x as u32) as usize] += 1;
+            Vec3::splat(if x < 5.02 { 24.0 } else { 0.3 })
+        },
+        &no_progress,
+    );
+    let mut calls = vec![0u32; (width * height) as usize];
+    for c in &counts {
+        for (total, n) in calls.iter_mut().zip(c) {
+            *total += n;
+        }
+    }
+    for y in 0..height {
+        for x in (0..width).filter(|&x| x != 6) {
+            let expected = if x == 5 { 256 } else { 16 };
+            assert_eq!(calls[(y * width + x) as usize], expected, "pixel ({x}, {y})");
+        }
+        // 256 N-rook samples: the coverage error is below 1/256, i.e. (24 − 0.3)/256 in radiance.
+        let v = image.get(5, y).x;
+        assert!((v - 0.774).abs() < 23.7 / 256.0, "row {y}: {v}");
+    }
+    assert!(stats.adaptive_pixels >= height as u64);
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! The film: the image (`image`), reconstruction filters sampled by filter importance sampling
 //! (`filter`), the per-pixel sampler and its stratified patterns (`sampler`), and the tiled parallel
-//! loop with Whitted-style adaptive supersampling (`tiles`).
+//! loop with adaptive supersampling (`tiles`).
 
 mod filter;
 mod image;
@@ -12,12 +12,10 @@ pub use filter::{
     FilterSampler, FILTER_TABLE_BINS,
 };
 pub use image::{luminance, Image};
-pub use sampler::{
-    multi_jittered, owen_scramble, owen_sobol_2d, sobol_2d_bits, stratum_grid, Pattern2d, PixelSampler, Sampler,
-};
+pub use sampler::{owen_scramble, owen_sobol_2d, sobol_2d_bits, Pattern2d, PixelSampler, Sampler};
 pub use tiles::{
-    luminance_contrast, render, render_samples_with, render_with, FilmSample, FilmStats, ADAPTIVE_CONTRAST_EPSILON,
-    TILE_SIZE_PX,
+    luminance_contrast, one_sample_error, render, render_samples_with, render_with, FilmSample, FilmStats,
+    ADAPTIVE_CONTRAST_EPSILON, ADAPTIVE_ERROR_EPSILON_SQ, TILE_SIZE_PX,
 };
 
 use crate::scene::ImageSettings;
@@ -33,6 +31,8 @@ pub enum FilmError {
     FilterRadius(f32),
     #[error("adaptive threshold {0} must be finite and non-negative")]
     AdaptiveThreshold(f32),
+    #[error("adaptive error {0} must be finite and positive")]
+    AdaptiveError(f32),
 }
 
 /// Rejects settings the film would otherwise have to repair: call it where settings enter the
@@ -51,6 +51,11 @@ pub fn check_settings(settings: &ImageSettings) -> Result<(), FilmError> {
     if let Some(t) = settings.adaptive_threshold {
         if !(t.is_finite() && t >= 0.0) {
             return Err(FilmError::AdaptiveThreshold(t));
+        }
+    }
+    if let Some(e) = settings.adaptive_error {
+        if !(e.is_finite() && e > 0.0) {
+            return Err(FilmError::AdaptiveError(e));
         }
     }
     Ok(())

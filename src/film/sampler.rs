@@ -1,6 +1,6 @@
 //! Where a pixel's samples go: the per-pixel `Sampler` that the film hands on to the shader (with
-//! Owen-scrambled Sobol patterns shared across the pixel's samples), and the multi-jittered pattern of
-//! the film's sample positions drawn from it.
+//! Owen-scrambled Sobol patterns shared across the pixel's samples), the pixel's own shuffled,
+//! scrambled Sobol sequence of film positions.
 
 use crate::rng::{splitmix64, Pcg32};
 
@@ -55,8 +55,46 @@ impl Sampler {
     /// `independent(seed, pixel)`, plus a scrambling key from both. Call `start_sample` before each of
     /// the pixel's samples.
     pub fn pixel(seed: u64, pixel: u64) -> Sampler {
-        let key = splitmix64(splitmix64(seed) ^ pixel.wrapping_mul(0xD1B5_4A32_D192_ED03));
-        Sampler::Pixel(PixelSampler { rng: Pcg32::new(seed, pixel), key, sample_index: 0, dimension: 0 })
+        Sampler::Pixel(PixelSampler {
+            rng: Pcg32::new(seed, pixel),
+            key: pixel_key(seed, pixel),
+            sample_index: 0,
+            dimension: 0,
+        })
+    }
+
+    /// The film's sampler for pixel `pixel`'s adaptive samples, drawn after its base samples were
+    /// shaded by `pixel(seed, pixel)`: the same scrambling key, so its samples (numbered on from the
+    /// base count) continue the pixel's Sobol patterns and positions, and a random stream of its own,
+    /// so that its independent numbers do not repeat the base samples'.
+    pub fn pixel_adaptive(seed: u64, pixel: u64) -> Sampler {
+        let stream_seed = splitmix64(seed ^ ADAPTIVE_STREAM);
+        Sampler::Pixel(PixelSampler {
+            rng: Pcg32::new(stream_seed, pixel),
+            key: pixel_key(seed, pixel),
+            sample_index: 0,
+            dimension: 0,
+        })
+    }
+
+    /// Where in its pixel sample `index` lands, in [0, 1)²: point `shuffle(index)` of the 2-D Sobol
+    /// sequence, Owen-scrambled, with the shuffle and both scrambles seeded by the pixel's key alone
+    /// (Burley 2020, "Practical hash-based Owen scrambling"). The shuffle is a nested uniform
+    /// scramble of the index, which maps every aligned block of 2^m indices onto an aligned block, so
+    /// the pixel's first 2^m samples (its base samples, and its base and adaptive samples together)
+    /// are a (0, m, 2)-net: one sample in each elementary interval of area 2^-m, N-rooks included.
+    /// The shuffle decorrelates the positions from the shading patterns, which use the same sequence
+    /// unshuffled. An `Independent` sampler draws uniform positions from its stream.
+    pub fn film_position(&mut self, index: u32) -> [f32; 2] {
+        match self {
+            Sampler::Independent(rng) => [rng.next_f32(), rng.next_f32()],
+            Sampler::Pixel(p) => {
+                let h = splitmix64(p.key ^ FILM_POSITION_DIMENSION);
+                let shuffled = owen_scramble(index, (h >> 40) as u32 ^ h as u32);
+                let seeds = splitmix64(h);
+                owen_sobol_2d(shuffled, [seeds as u32, (seeds >> 32) as u32])
+            }
+        }
     }
 
     /// Marks the start of the pixel's sample `index` (0, 1, … in the order they are shaded, adaptive
@@ -117,6 +155,18 @@ impl Sampler {
     }
 }
 
+/// The scrambling key of pixel `pixel` of seed `seed`.
+fn pixel_key(seed: u64, pixel: u64) -> u64 {
+    splitmix64(splitmix64(seed) ^ pixel.wrapping_mul(0xD1B5_4A32_D192_ED03))
+}
+
+/// Mixed into a pixel's key for its film positions. Pattern d mixes in (d + 1)·0x9E37_79B9_7F4A_7C15,
+/// which equals this only for d + 1 = 0x498C_2FF4_E281_0000: never in practice.
+const FILM_POSITION_DIMENSION: u64 = 0xF11B_0517_1095_0000;
+
+/// Mixed into the seed for the random stream of a pixel's adaptive samples.
+const ADAPTIVE_STREAM: u64 = 0xADA9_7153_A3B1_E500;
+
 /// Point i of the first two dimensions of Sobol's sequence (Sobol 1967), as 32-bit fractions: dimension
 /// 0 is the van der Corput radical inverse (the bits of i reversed), dimension 1 has generator matrix
 /// Pascal's triangle mod 2 (direction numbers v₁ = 2³¹, v_{k+1} = v_k ⊕ (v_k ≫ 1)). Together a
@@ -156,72 +206,11 @@ pub fn owen_sobol_2d(i: u32, seeds: [u32; 2]) -> [f32; 2] {
     [to_unit(owen_scramble(x, seeds[0])), to_unit(owen_scramble(y, seeds[1]))]
 }
 
-/// The stratum grid (columns, rows) for `count` samples: columns·rows = count with columns the largest
-/// divisor ≤ √count, so square counts give square grids and a prime p gives 1×p (which multi-jittering
-/// still stratifies into p strata along each axis).
-pub fn stratum_grid(count: u32) -> (u32, u32) {
-    let count = count.max(1);
-    let mut columns = (count as f64).sqrt() as u32;
-    while columns > 1 && !count.is_multiple_of(columns) {
-        columns -= 1;
-    }
-    let columns = columns.max(1);
-    (columns, count / columns)
-}
-
-/// Multi-jittered sampling (Chiu, Shirley & Wang 1994): `columns × rows` points in [0, 1)², exactly one
-/// in each cell of the columns×rows grid AND exactly one in each of the N = columns·rows strata of
-/// width 1/N along each axis (N-rooks). Cell (i, j) starts at the canonical
-/// x = (i + (j + ξ)/rows)/columns, y = (j + (i + ξ')/columns)/rows; x values are then shuffled among the
-/// cells of a column and y values among the cells of a row, which keeps both properties.
-/// Points are appended to `out` row by row.
-pub fn multi_jittered(columns: u32, rows: u32, sampler: &mut Sampler, out: &mut Vec<[f32; 2]>) {
-    let (nc, nr) = (columns as usize, rows as usize);
-    let start = out.len();
-    for j in 0..nr {
-        for i in 0..nc {
-            let x = (i as f32 + (j as f32 + sampler.next_1d()) / nr as f32) / nc as f32;
-            let y = (j as f32 + (i as f32 + sampler.next_1d()) / nc as f32) / nr as f32;
-            // f32 rounding of values just below 1 must not escape the unit square.
-            out.push([x.min(ONE_BELOW), y.min(ONE_BELOW)]);
-        }
-    }
-    let cells = &mut out[start..];
-    for i in 0..nc {
-        for j in (1..nr).rev() {
-            let k = ((sampler.next_u32() as u64 * (j as u64 + 1)) >> 32) as usize;
-            let (a, b) = (j * nc + i, k * nc + i);
-            let tmp = cells[a][0];
-            cells[a][0] = cells[b][0];
-            cells[b][0] = tmp;
-        }
-    }
-    for j in 0..nr {
-        for i in (1..nc).rev() {
-            let k = ((sampler.next_u32() as u64 * (i as u64 + 1)) >> 32) as usize;
-            let (a, b) = (j * nc + i, j * nc + k);
-            let tmp = cells[a][1];
-            cells[a][1] = cells[b][1];
-            cells[b][1] = tmp;
-        }
-    }
-}
-
 const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn stratum_grid_is_as_square_as_the_count_allows() {
-        assert_eq!(stratum_grid(16), (4, 4));
-        assert_eq!(stratum_grid(8), (2, 4));
-        assert_eq!(stratum_grid(12), (3, 4));
-        assert_eq!(stratum_grid(7), (1, 7));
-        assert_eq!(stratum_grid(1), (1, 1));
-        assert_eq!(stratum_grid(0), (1, 1));
-    }
 
     /// The first 2^m points of a (0, 2)-sequence put exactly one point in each elementary interval of
     /// area 2^-m: here every 2^a × 2^(m−a) grid, a = 0..=m.

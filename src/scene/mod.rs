@@ -64,12 +64,23 @@ pub struct ImageSettings {
     /// Adaptive supersampling: extra samples where a pixel's samples disagree by more than this
     /// relative contrast; `None` disables it.
     pub adaptive_threshold: Option<f32>,
+    /// Adaptive supersampling: extra samples where one sample of the luminance seen in the pixel or
+    /// its neighbours could change the pixel by more than this relative error
+    /// (`film::one_sample_error`); `None` disables it.
+    pub adaptive_error: Option<f32>,
     /// Most samples an adaptive pixel may take.
     pub adaptive_max_samples: u32,
     pub seed: u64,
     /// PNG exposure (`[image] exposure`: stops or "auto"); `--exposure` overrides it.
     pub exposure: crate::output::Exposure,
 }
+
+/// `adaptive_error` of the default preset (and of a scene with no preset): measured on l_room,
+/// alcove_hall and cornell_box (docs/accuracy.md, "Seeds").
+pub const DEFAULT_ADAPTIVE_ERROR: f32 = 0.05;
+
+/// `adaptive_max_samples` of the default preset.
+pub const DEFAULT_ADAPTIVE_MAX_SAMPLES: u32 = 256;
 
 impl Default for ImageSettings {
     fn default() -> Self {
@@ -80,7 +91,8 @@ impl Default for ImageSettings {
             filter: FilterKind::Box,
             filter_radius_px: 0.5,
             adaptive_threshold: None,
-            adaptive_max_samples: 64,
+            adaptive_error: Some(DEFAULT_ADAPTIVE_ERROR),
+            adaptive_max_samples: DEFAULT_ADAPTIVE_MAX_SAMPLES,
             seed: 0,
             exposure: crate::output::Exposure::default(),
         }
@@ -451,6 +463,16 @@ impl Quality {
         }
     }
 
+    /// (adaptive error bound, most samples per adaptive pixel): `[image] adaptive_error` and
+    /// `adaptive_max_samples`. Preview leaves adaptive sampling off.
+    pub fn adaptive_settings(self) -> (Option<f32>, u32) {
+        match self {
+            Quality::Preview => (None, 64),
+            Quality::Default => (Some(DEFAULT_ADAPTIVE_ERROR), DEFAULT_ADAPTIVE_MAX_SAMPLES),
+            Quality::High => (Some(0.5 * DEFAULT_ADAPTIVE_ERROR), 4 * DEFAULT_ADAPTIVE_MAX_SAMPLES),
+        }
+    }
+
     /// (final gather, gather rays, cache accuracy)
     pub fn gather_settings(self) -> (FinalGatherMode, u32, f32) {
         match self {
@@ -478,7 +500,9 @@ impl SceneDescription {
         self.radiosity.max_element_edge = self.diagonal() / divisor;
         self.radiosity.hemicube_resolution_px = resolution;
         self.image.samples_per_pixel = spp;
-        self.image.adaptive_max_samples = self.image.adaptive_max_samples.max(spp);
+        let (adaptive_error, adaptive_max_samples) = quality.adaptive_settings();
+        self.image.adaptive_error = adaptive_error;
+        self.image.adaptive_max_samples = adaptive_max_samples.max(spp);
         self.render.light_samples = light_samples;
         self.radiosity.hierarchy.preset = quality;
         let (final_gather, gather_rays, cache_accuracy) = quality.gather_settings();

@@ -71,6 +71,7 @@ struct RawImage {
     filter: Option<FilterKind>,
     filter_radius: Option<S<f32>>,
     adaptive_threshold: Option<S<f32>>,
+    adaptive_error: Option<S<f32>>,
     adaptive_max_samples: Option<S<i64>>,
     seed: Option<u64>,
     exposure: Option<S<crate::output::Exposure>>,
@@ -443,7 +444,12 @@ fn image_settings(loc: &Locator, raw: Option<&RawImage>, base: ImageSettings) ->
     if let Some(radius) = loc.ranged(&r.filter_radius, "filter_radius", |x| x > 0.0 && x <= 8.0, "in (0, 8] pixels")? {
         s.filter_radius_px = radius;
     }
-    s.adaptive_threshold = loc.ranged(&r.adaptive_threshold, "adaptive_threshold", |x| x > 0.0, "a positive number")?;
+    if let Some(t) = loc.ranged(&r.adaptive_threshold, "adaptive_threshold", |x| x > 0.0, "a positive number")? {
+        s.adaptive_threshold = Some(t);
+    }
+    if let Some(e) = loc.ranged(&r.adaptive_error, "adaptive_error", |x| x > 0.0, "a positive number")? {
+        s.adaptive_error = Some(e);
+    }
     s.adaptive_max_samples = loc.positive_int(
         &r.adaptive_max_samples,
         "adaptive_max_samples",
