@@ -13,6 +13,10 @@ use super::nodes::Nodes;
 /// Normals of triangles in one smoothing group differ by less than acos(0.9) ≈ 25.8°.
 const SMOOTHING_COS: f32 = 0.9;
 
+/// Upper bound on the hanging-node sweeps of `leaf_mesh`: one per level of nested T-junctions (a leaf
+/// is at most a few dozen subdivisions below its input triangle).
+const MAX_HANGING_SWEEPS: usize = 64;
+
 /// Leaf elements as an indexed mesh.
 #[derive(Clone, Debug, Default)]
 pub struct LeafMesh {
@@ -120,18 +124,30 @@ pub fn leaf_mesh(nodes: &Nodes, inputs: &InputTriangles, root: usize) -> LeafMes
     }
     edges.sort_by(|x, y| y.0.total_cmp(&x.0).then((x.1, x.2, x.3).cmp(&(y.1, y.2, y.3))));
     edges.dedup_by(|x, y| (x.1, x.2, x.3) == (y.1, y.2, y.3));
+    // Longest first is not always enough: an edge's end can itself hang on an edge of the same or a
+    // shorter length processed later (a T-junction that points the other way), and then the midpoint
+    // read a stale end. The hanging nodes form a DAG (a midpoint depends only on its edge's ends), so
+    // repeating the sweep until nothing changes settles it, one dependency level per sweep.
     let mut work = Vec::new();
-    for &(_, group, a, b) in &edges {
-        work.push((a, b));
-        while let Some((a, b)) = work.pop() {
-            let mid = (mesh.positions[a as usize] + mesh.positions[b as usize]) * 0.5;
-            if let Some(&m) = vertex_of.get(&(group, key(mid))) {
-                if m != a && m != b {
-                    value[m as usize] = (value[a as usize] + value[b as usize]) * 0.5;
-                    work.push((a, m));
-                    work.push((m, b));
+    for _sweep in 0..MAX_HANGING_SWEEPS {
+        let mut changed = false;
+        for &(_, group, a, b) in &edges {
+            work.push((a, b));
+            while let Some((a, b)) = work.pop() {
+                let mid = (mesh.positions[a as usize] + mesh.positions[b as usize]) * 0.5;
+                if let Some(&m) = vertex_of.get(&(group, key(mid))) {
+                    if m != a && m != b {
+                        let interpolated = (value[a as usize] + value[b as usize]) * 0.5;
+                        changed |= value[m as usize] != interpolated;
+                        value[m as usize] = interpolated;
+                        work.push((a, m));
+                        work.push((m, b));
+                    }
                 }
             }
+        }
+        if !changed {
+            break;
         }
     }
     mesh.vertex_exitance = value.iter().map(|v| v.as_vec3()).collect();
