@@ -226,11 +226,14 @@ fn main() -> ExitCode {
             mis / ex
         );
     }
-    // Element ← element links: the estimator (unoccluded) against a 768-point receiver quadrature
-    // (4 midpoint subdivisions × the three-point rule), power-weighted, split by whether the pair is near.
+    // Element ← element links, one sample of them for two checks. The estimator (unoccluded) against a
+    // 768-point receiver quadrature (4 midpoint subdivisions × the three-point rule), power-weighted,
+    // split by whether the pair is near. Visibility: the link's N-ray fraction against 256 rays, by
+    // receiver surface, weighted by unoccluded power.
     let ee = &by_kind[0];
     let stride = (ee.len() / (50 * per_type)).max(1);
-    let rows: Vec<(bool, f64, f64)> = ee
+    let fine_ctx = VisibilityContext { rays: 256, ..ctx };
+    let sampled: Vec<((bool, f64, f64), (usize, f64, f64, f64))> = ee
         .iter()
         .step_by(stride)
         .collect::<Vec<_>>()
@@ -242,27 +245,13 @@ fn main() -> ExitCode {
             let fine = fine_form_factor(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
             let w = nodes.area[r] as f64 * b_mean[s];
             let near = nodes.centre[r].distance(nodes.centre[s]) < 1.5 * (nodes.radius[r] + nodes.radius[s]);
-            (near, w * f, w * fine)
-        })
-        .collect();
-    // Visibility of the same element links: the link's N-ray fraction against 256 rays, by receiver
-    // surface, weighted by unoccluded power.
-    let fine_ctx = VisibilityContext { rays: 256, ..ctx };
-    let vis: Vec<(usize, f64, f64, f64)> = ee
-        .iter()
-        .step_by(stride)
-        .collect::<Vec<_>>()
-        .par_iter()
-        .map(|&&i| {
-            let l = &records[i];
-            let (r, s) = (l.receiver as usize, l.source as usize);
-            let (f, _) = element_to_element(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
-            let w = nodes.area[r] as f64 * b_mean[s] * f;
             let v = link_visibility(&ctx, &nodes, r, s).visible as f64;
             let v_fine = link_visibility(&fine_ctx, &nodes, r, s).visible as f64;
-            (inputs.surface[nodes.input[r] as usize] as usize, w, w * v, w * v_fine)
+            let surface = inputs.surface[nodes.input[r] as usize] as usize;
+            ((near, w * f, w * fine), (surface, w * f, w * f * v, w * f * v_fine))
         })
         .collect();
+    let (rows, vis): (Vec<_>, Vec<_>) = sampled.into_iter().unzip();
     for k in 0..surfaces {
         let (w, v, vf) =
             vis.iter().filter(|x| x.0 == k).fold((0.0, 0.0, 0.0), |a, x| (a.0 + x.1, a.1 + x.2, a.2 + x.3));
