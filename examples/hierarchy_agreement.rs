@@ -233,7 +233,7 @@ fn main() -> ExitCode {
     let ee = &by_kind[0];
     let stride = (ee.len() / (50 * per_type)).max(1);
     let fine_ctx = VisibilityContext { rays: 256, ..ctx };
-    let sampled: Vec<((bool, f64, f64), (usize, f64, f64, f64))> = ee
+    let (rows, vis): (Vec<_>, Vec<_>) = ee
         .iter()
         .step_by(stride)
         .collect::<Vec<_>>()
@@ -250,8 +250,7 @@ fn main() -> ExitCode {
             let surface = inputs.surface[nodes.input[r] as usize] as usize;
             ((near, w * f, w * fine), (surface, w * f, w * f * v, w * f * v_fine))
         })
-        .collect();
-    let (rows, vis): (Vec<_>, Vec<_>) = sampled.into_iter().unzip();
+        .unzip();
     for k in 0..surfaces {
         let (w, v, vf) =
             vis.iter().filter(|x| x.0 == k).fold((0.0, 0.0, 0.0), |a, x| (a.0 + x.1, a.1 + x.2, a.2 + x.3));
