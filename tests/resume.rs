@@ -321,3 +321,14 @@ fn a_damaged_or_foreign_hierarchical_checkpoint_is_ignored_with_a_warning() {
     );
     assert!(std::fs::read(&output).unwrap() == reference);
 }
+
+#[test]
+fn a_hierarchical_scene_is_refused_by_shard_and_merge_with_a_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("part.0").display().to_string();
+    let out = radray(&preview_args(&target, &["--method", "hierarchical", "--shard", "0/3"]));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("sharding and merging need the stored matrix"), "{stderr}");
+    assert!(!Path::new(&target).exists(), "nothing written");
+}

@@ -34,7 +34,7 @@ pub enum MethodError {
     #[error("{scene}: {source}")]
     Hierarchy { scene: String, source: HierarchyError },
     #[error("interrupted by {}{}", crate::interrupt::signal_name(*signal), match checkpoint {
-        Some(path) => format!("; the finished form-factor rows are saved in {}: run the same command again to resume", path.display()),
+        Some(path) => format!("; the finished pass-one work (form-factor rows or link estimates) is saved in {}: run the same command again to resume", path.display()),
         None => String::new(),
     })]
     Interrupted { signal: usize, checkpoint: Option<std::path::PathBuf> },

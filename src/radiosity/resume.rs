@@ -83,15 +83,27 @@ pub struct SceneKeys {
 /// The checkpoint at `path` if it belongs to this scene and shard; a damaged or stale one is ignored
 /// with a warning (and overwritten by the next checkpoint), a missing one silently.
 pub fn load_checkpoint(path: &Path, keys: SceneKeys, shard: Shard, progress: &Progress) -> Option<PartialRows> {
+    load(path, RowsKind::Checkpoint, keys, shard, progress, rows_file::read)
+}
+
+/// The payload `read` finds at `path` if the file is of `kind` and this run's; warns otherwise.
+fn load<T>(
+    path: &Path,
+    kind: RowsKind,
+    keys: SceneKeys,
+    shard: Shard,
+    progress: &Progress,
+    read: impl FnOnce(&Path) -> Result<(RowsHeader, T), RowsFileError>,
+) -> Option<T> {
     if !path.exists() {
         return None;
     }
-    match rows_file::read(path) {
+    match read(path) {
         Err(e) => {
             progress.note(&format!("warning: ignoring the checkpoint: {e}; starting pass one afresh"));
             None
         }
-        Ok((header, rows)) => usable(path, &header, RowsKind::Checkpoint, keys, shard, progress).then_some(rows),
+        Ok((header, payload)) => usable(path, &header, kind, keys, shard, progress).then_some(payload),
     }
 }
 
@@ -124,18 +136,7 @@ fn usable(
 /// `hierarchy::estimates`) if it belongs to this scene and settings; a damaged or stale one is
 /// ignored with a warning, a missing one silently.
 pub fn load_hierarchy_checkpoint(path: &Path, keys: SceneKeys, progress: &Progress) -> Option<Vec<LoggedEstimate>> {
-    if !path.exists() {
-        return None;
-    }
-    match links_file::read(path) {
-        Err(e) => {
-            progress.note(&format!("warning: ignoring the checkpoint: {e}; starting pass one afresh"));
-            None
-        }
-        Ok((header, entries)) => {
-            usable(path, &header, RowsKind::HierarchyCheckpoint, keys, Shard::WHOLE, progress).then_some(entries)
-        }
-    }
+    load(path, RowsKind::HierarchyCheckpoint, keys, Shard::WHOLE, progress, links_file::read)
 }
 
 /// Writes the checkpoint of a row computation when `CHECKPOINT_INTERVAL` has passed since the last

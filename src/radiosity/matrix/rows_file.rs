@@ -369,13 +369,20 @@ mod tests {
         let (header, rows) = sample();
         write(&path, &header, &rows, 3).unwrap();
         let bytes = std::fs::read(&path).unwrap();
-        for len in 0..bytes.len() {
-            assert!(parse(&path, &bytes[..len]).is_err(), "truncated to {len} bytes");
-        }
-        for at in 0..bytes.len() {
-            let mut damaged = bytes.clone();
-            damaged[at] ^= 0x10;
-            assert!(parse(&path, &damaged).is_err(), "byte {at} flipped");
-        }
+        assert_every_damage_refused(&bytes, |b| parse(&path, b).is_err());
+    }
+}
+
+/// Checks that `refused` refuses every truncation of `bytes` and every copy with one byte flipped
+/// (the checksum and the bounds checks of a file of this family).
+#[cfg(test)]
+pub(crate) fn assert_every_damage_refused(bytes: &[u8], refused: impl Fn(&[u8]) -> bool) {
+    for len in 0..bytes.len() {
+        assert!(refused(&bytes[..len]), "truncated to {len} bytes");
+    }
+    for at in 0..bytes.len() {
+        let mut damaged = bytes.to_vec();
+        damaged[at] ^= 0x10;
+        assert!(refused(&damaged), "byte {at} flipped");
     }
 }
