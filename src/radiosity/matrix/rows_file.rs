@@ -329,6 +329,20 @@ impl<'a> Payload<'a> {
     }
 }
 
+/// Checks that `refused` refuses every truncation of `bytes` and every copy with one byte flipped
+/// (the checksum and the bounds checks of a file of this family).
+#[cfg(test)]
+pub(crate) fn assert_every_damage_refused(bytes: &[u8], refused: impl Fn(&[u8]) -> bool) {
+    for len in 0..bytes.len() {
+        assert!(refused(&bytes[..len]), "truncated to {len} bytes");
+    }
+    for at in 0..bytes.len() {
+        let mut damaged = bytes.to_vec();
+        damaged[at] ^= 0x10;
+        assert!(refused(&damaged), "byte {at} flipped");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -370,19 +384,5 @@ mod tests {
         write(&path, &header, &rows, 3).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         assert_every_damage_refused(&bytes, |b| parse(&path, b).is_err());
-    }
-}
-
-/// Checks that `refused` refuses every truncation of `bytes` and every copy with one byte flipped
-/// (the checksum and the bounds checks of a file of this family).
-#[cfg(test)]
-pub(crate) fn assert_every_damage_refused(bytes: &[u8], refused: impl Fn(&[u8]) -> bool) {
-    for len in 0..bytes.len() {
-        assert!(refused(&bytes[..len]), "truncated to {len} bytes");
-    }
-    for at in 0..bytes.len() {
-        let mut damaged = bytes.to_vec();
-        damaged[at] ^= 0x10;
-        assert!(refused(&damaged), "byte {at} flipped");
     }
 }
