@@ -104,6 +104,8 @@ pub fn refine(
     let mut kept: Vec<LinkRecord> = Vec::with_capacity(work.len());
     loop {
         let mut next: Vec<Pending> = Vec::new();
+        // Pieces made by this round's splits get their texture means after the round (in parallel).
+        let first_piece = nodes.len();
         // The links of this round still to be decided count against the budget too.
         let work_len = work.len();
         for link in work.drain(..) {
@@ -170,6 +172,7 @@ pub fn refine(
                 }
             }
         }
+        nodes.assign_texture_means(first_piece);
         if next.is_empty() {
             break;
         }
