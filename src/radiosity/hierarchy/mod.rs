@@ -480,17 +480,11 @@ fn sweep_pass(
 /// of its children (`Nodes::set_cluster_children`). Children always have higher indices than their
 /// parent, so one pass in reverse index order sees every child before its cluster.
 fn assign_materials(nodes: &mut Nodes, texels: &InputTexels) {
+    nodes.assign_element_materials(texels, 0);
     for n in (0..nodes.len()).rev() {
-        if nodes.is_cluster[n] {
-            let (first, count) = (nodes.first_child[n], nodes.child_count[n]);
-            if first != nodes::NONE {
-                nodes.set_cluster_children(n, first, count);
-            }
-        } else {
-            let (reflectance, emission) = texels.solved_materials(nodes.input[n], nodes.corners[n]);
-            nodes.reflectance[n] = reflectance;
-            nodes.emission[n] = emission;
-            nodes.reflectance_max[n] = reflectance.max_element();
+        let (first, count) = (nodes.first_child[n], nodes.child_count[n]);
+        if nodes.is_cluster[n] && first != nodes::NONE {
+            nodes.set_cluster_children(n, first, count);
         }
     }
     nodes.texels = (!texels.surfaces.is_untextured()).then(|| Arc::new(texels.clone()));

@@ -108,6 +108,8 @@ pub fn refine_logged(
     let mut kept: Vec<LinkRecord> = Vec::with_capacity(work.len());
     loop {
         let mut next: Vec<Pending> = Vec::new();
+        // Pieces made by this round's splits get their texture means after the round (in parallel).
+        let first_piece = nodes.len();
         // The links of this round still to be decided count against the budget too.
         let work_len = work.len();
         for link in work.drain(..) {
@@ -174,6 +176,7 @@ pub fn refine_logged(
                 }
             }
         }
+        nodes.assign_texture_means(first_piece);
         if next.is_empty() {
             break;
         }
