@@ -27,36 +27,30 @@ pub fn link_seed(seed: u64, receiver: u32, source: u32) -> u64 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Visibility {
     /// V: the fraction of sample pairs facing each other that nothing blocks (what the form factor
-    /// is multiplied by).
+    /// is multiplied by; for a cluster receiver also the share of its facing members the source
+    /// reaches, see `links::push_spread`).
     pub visible: f32,
-    /// q: the fraction of receiver samples that the source reaches, among those its sample faces:
-    /// a receiver point facing away from the source, or behind an occluder, counts as not reached.
-    /// Below 1 for a cluster receiver, part of the cluster gets nothing from this source although
-    /// the link's irradiance is pushed to all of it (the leak through a wall between two rooms whose
-    /// faces share a cluster); see `links::push_spread`.
-    pub receiving: f32,
 }
 
 /// The visibility of link (receiver ← source), measured with rays:
 ///
-/// V ≈ (1/N) Σ_k [segment x_k → y_k unoccluded],  q ≈ #{k: pair k faces and is unoccluded} / #{k: y_k faces x_k}
+/// V ≈ (1/N) Σ_k [segment x_k → y_k unoccluded]
 ///
 /// V over N = `ctx.rays` sample pairs that face each other (n_x·(y − x) > 0 and n_y·(x − y) > 0): the form
 /// factor already accounts for orientation (Lambert's clipped polygon, a cluster's projected area), so
 /// a pair on elements that face away is not a visibility sample; without this rule a convex object's
-/// cluster would count its own back faces as occluders and lose half its transfer. q over every drawn
-/// pair whose source point faces the receiver point: the part of the receiver that really receives.
+/// cluster would count its own back faces as occluders and lose half its transfer.
 /// x_k is stratified over the receiver (stratum k of N in the first coordinate), y_k over the source
 /// with a scrambled stratum order, both uniform by area; a cluster end is sampled by descending its
 /// tree with probabilities proportional to area, down to an input triangle. Up to 4N pairs are drawn
-/// to find N facing ones; if none face, the orientation terms of the form factor are ≈ 0 and V = 1
-/// (q = 1 when no source point faces, q = 0 when some do but none reaches). Each end is moved
+/// to find N facing ones; if none face, the orientation terms of the form factor are ≈ 0 and V = 1.
+/// Each end is moved
 /// `offset` off its surface towards the other.
 pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, source: usize) -> Visibility {
     let n = ctx.rays.max(1);
     let mut rng = Pcg32::new(link_seed(ctx.seed, receiver as u32, source as u32), 0);
     let shift = rng.next_u32() % n;
-    let (mut visible, mut facing, mut lit_by_source) = (0u32, 0u32, 0u32);
+    let (mut visible, mut facing) = (0u32, 0u32);
     for attempt in 0..4 * n {
         if facing == n {
             break;
@@ -67,11 +61,7 @@ pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, 
         let (x, nx) = sample_point(nodes, receiver, ur, rng.next_f32(), &mut rng);
         let (y, ny) = sample_point(nodes, source, us, rng.next_f32(), &mut rng);
         let d = y - x;
-        if !(ny.dot(d) < 0.0) {
-            continue;
-        }
-        lit_by_source += 1;
-        if !(nx.dot(d) > 0.0) {
+        if !(ny.dot(d) < 0.0 && nx.dot(d) > 0.0) {
             continue;
         }
         facing += 1;
@@ -81,10 +71,7 @@ pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, 
             visible += 1;
         }
     }
-    Visibility {
-        visible: if facing == 0 { 1.0 } else { visible as f32 / facing as f32 },
-        receiving: if lit_by_source == 0 { 1.0 } else { visible as f32 / lit_by_source as f32 },
-    }
+    Visibility { visible: if facing == 0 { 1.0 } else { visible as f32 / facing as f32 } }
 }
 
 /// A point uniformly distributed by area on `node` from (u, v) in [0,1)² (descending clusters with
