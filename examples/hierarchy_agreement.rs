@@ -1,7 +1,10 @@
 //! Diagnoses where the hierarchy and the full matrix disagree (issue 10): per-surface mean exitance of
 //! both solvers, and link by link, by link type, the power each link delivers against the exact sum
 //! over its leaf-element pairs (unoccluded, so exact on convex scenes such as cornell_empty), plus how
-//! much of a cluster receiver's power lands on the wrong children.
+//! much of a cluster receiver's power lands on the wrong children, and the same against leaf pairs that all
+//! take the source's mean exitance (the gap between the two is the source-side discretisation: a coarse
+//! source whose leaves' exitance correlates with their form factor). Last, link coverage from sampled
+//! leaves: every input triangle should reach a leaf through exactly one link of it or an ancestor.
 //! `cargo run --release --example hierarchy_agreement -- SCENE.toml [EPSILON] [LINKS_PER_TYPE] [TOLERANCE]`.
 
 use std::process::ExitCode;
@@ -185,7 +188,7 @@ fn main() -> ExitCode {
     for (k, list) in by_kind.iter().enumerate() {
         let stride = (list.len() / per_type).max(1);
         let picked: Vec<usize> = list.iter().step_by(stride).copied().collect();
-        let sums: Vec<(f64, f64, f64)> = picked
+        let sums: Vec<(f64, f64, f64, f64)> = picked
             .par_iter()
             .map(|&i| {
                 let l = &records[i];
@@ -195,42 +198,49 @@ fn main() -> ExitCode {
                 let (rs, r_scale) = subsample(&nodes, leaves(&nodes, r), 128);
                 let (ss, s_scale) = subsample(&nodes, leaves(&nodes, s), 256);
                 let g = estimated / nodes.area[r] as f64;
-                let (mut exact, mut misplaced) = (0.0, 0.0);
+                let (mut exact, mut misplaced, mut flat) = (0.0, 0.0, 0.0);
                 let mut per_leaf = Vec::with_capacity(rs.len());
                 for &x in &rs {
-                    let mut p = 0.0;
+                    let (mut p, mut q) = (0.0, 0.0);
                     for &y in &ss {
                         if x != y {
                             let (f, _) = element_to_element(&nodes.corners[x], nodes.normal[x], &nodes.corners[y]);
                             p += nodes.area[x] as f64 * f * b_mean[y];
+                            q += nodes.area[x] as f64 * f * b_mean[s];
                         }
                     }
                     per_leaf.push(p * s_scale);
                     exact += p * s_scale * r_scale;
+                    flat += q * s_scale * r_scale;
                 }
                 for (j, &x) in rs.iter().enumerate() {
                     misplaced += (nodes.area[x] as f64 * g - per_leaf[j]).abs() * r_scale;
                 }
-                (estimated, exact, 0.5 * misplaced)
+                (estimated, exact, 0.5 * misplaced, flat)
             })
             .collect();
-        let (est, ex, mis) = sums.iter().fold((0.0, 0.0, 0.0), |a, s| (a.0 + s.0, a.1 + s.1, a.2 + s.2));
+        let (est, ex, mis, flat) =
+            sums.iter().fold((0.0, 0.0, 0.0, 0.0), |a, s| (a.0 + s.0, a.1 + s.1, a.2 + s.2, a.3 + s.3));
         println!(
-            "{:18} {:8} {:8} {:11.4e} {:11.4e} {:9.4} {:9.4}",
+            "{:18} {:8} {:8} {:11.4e} {:11.4e} {:9.4} {:9.4}  est/exact-with-uniform-B_S {:.4}",
             names[k],
             list.len(),
             picked.len(),
             est * stride as f64,
             ex * stride as f64,
             est / ex,
-            mis / ex
+            mis / ex,
+            est / flat
         );
     }
-    // Element ← element links: the estimator (unoccluded) against a 768-point receiver quadrature
-    // (4 midpoint subdivisions × the three-point rule), power-weighted, split by whether the pair is near.
+    // Element ← element links, one sample of them for two checks. The estimator (unoccluded) against a
+    // 768-point receiver quadrature (4 midpoint subdivisions × the three-point rule), power-weighted,
+    // split by whether the pair is near. Visibility: the link's N-ray fraction against 256 rays, by
+    // receiver surface, weighted by unoccluded power.
     let ee = &by_kind[0];
     let stride = (ee.len() / (50 * per_type)).max(1);
-    let rows: Vec<(bool, f64, f64)> = ee
+    let fine_ctx = VisibilityContext { rays: 256, ..ctx };
+    let (rows, vis): (Vec<_>, Vec<_>) = ee
         .iter()
         .step_by(stride)
         .collect::<Vec<_>>()
@@ -242,27 +252,12 @@ fn main() -> ExitCode {
             let fine = fine_form_factor(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
             let w = nodes.area[r] as f64 * b_mean[s];
             let near = nodes.centre[r].distance(nodes.centre[s]) < 1.5 * (nodes.radius[r] + nodes.radius[s]);
-            (near, w * f, w * fine)
-        })
-        .collect();
-    // Visibility of the same element links: the link's N-ray fraction against 256 rays, by receiver
-    // surface, weighted by unoccluded power.
-    let fine_ctx = VisibilityContext { rays: 256, ..ctx };
-    let vis: Vec<(usize, f64, f64, f64)> = ee
-        .iter()
-        .step_by(stride)
-        .collect::<Vec<_>>()
-        .par_iter()
-        .map(|&&i| {
-            let l = &records[i];
-            let (r, s) = (l.receiver as usize, l.source as usize);
-            let (f, _) = element_to_element(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
-            let w = nodes.area[r] as f64 * b_mean[s] * f;
             let v = link_visibility(&ctx, &nodes, r, s).visible as f64;
             let v_fine = link_visibility(&fine_ctx, &nodes, r, s).visible as f64;
-            (inputs.surface[nodes.input[r] as usize] as usize, w, w * v, w * v_fine)
+            let surface = inputs.surface[nodes.input[r] as usize] as usize;
+            ((near, w * f, w * fine), (surface, w * f, w * f * v, w * f * v_fine))
         })
-        .collect();
+        .unzip();
     for k in 0..surfaces {
         let (w, v, vf) =
             vis.iter().filter(|x| x.0 == k).fold((0.0, 0.0, 0.0), |a, x| (a.0 + x.1, a.1 + x.2, a.2 + x.3));
@@ -277,6 +272,7 @@ fn main() -> ExitCode {
             fine * stride as f64
         );
     }
+    coverage(&nodes, &links, &inputs, surfaces, per_type);
     ExitCode::SUCCESS
 }
 
@@ -325,4 +321,96 @@ fn subsample(nodes: &Nodes, all: Vec<usize>, limit: usize) -> (Vec<usize>, f64) 
 
 fn count_leaves(nodes: &Nodes, node: usize) -> usize {
     leaves(nodes, node).len()
+}
+
+/// One sampled leaf of `coverage`: its surface, Σ_t F(x ← t) exact, covered and linked, and the
+/// uncovered F by source surface.
+struct CoverageRow {
+    surface: usize,
+    exact: f64,
+    delivered: f64,
+    linked: f64,
+    missing: Vec<(usize, f64)>,
+}
+
+/// Link coverage seen from sampled front leaves x: every input triangle t should reach x exactly once,
+/// through one link (a ← S) with a = x or an ancestor and S covering part of t. Per receiver surface:
+/// Σ_t F(x ← t) (exact, unoccluded), the same weighted by the covered share of t (what the links
+/// deliver if their estimators were exact), and Σ F of x's links and its ancestors' (what they deliver).
+fn coverage(
+    nodes: &Nodes,
+    links: &Links,
+    inputs: &radray::radiosity::hierarchy::clusters::InputTriangles,
+    surfaces: usize,
+    per_type: usize,
+) {
+    let front: Vec<usize> = (0..nodes.len())
+        .filter(|&n| !nodes.is_cluster[n] && nodes.is_leaf(n) && !inputs.back[nodes.input[n] as usize])
+        .collect();
+    let stride = (front.len() / (5 * per_type)).max(1);
+    let rows: Vec<CoverageRow> = front
+        .iter()
+        .step_by(stride)
+        .collect::<Vec<_>>()
+        .par_iter()
+        .map(|&&x| {
+            let mut covered = vec![0.0f64; inputs.node.len()];
+            let mut linked = 0.0;
+            let mut a = x;
+            loop {
+                for k in links.range(a) {
+                    let s = links.source[k] as usize;
+                    linked += links.form_factor[k] as f64;
+                    for l in leaves(nodes, s) {
+                        covered[nodes.input[l] as usize] += nodes.area[l] as f64;
+                    }
+                }
+                let p = nodes.parent[a];
+                if p == u32::MAX || p as usize == a {
+                    break;
+                }
+                a = p as usize;
+            }
+            let (mut exact, mut delivered) = (0.0, 0.0);
+            let mut missing = vec![(0usize, 0.0f64); 0];
+            for (t, &node) in inputs.node.iter().enumerate() {
+                let node = node as usize;
+                if inputs.back[t] || t == nodes.input[x] as usize {
+                    continue;
+                }
+                let (f, _) = element_to_element(&nodes.corners[x], nodes.normal[x], &nodes.corners[node]);
+                let share = covered[t] / nodes.area[node] as f64;
+                exact += f;
+                delivered += f * share;
+                if f > 0.0 && (share - 1.0).abs() > 1e-3 {
+                    missing.push((inputs.surface[t] as usize, f * (1.0 - share)));
+                }
+            }
+            CoverageRow { surface: inputs.surface[nodes.input[x] as usize] as usize, exact, delivered, linked, missing }
+        })
+        .collect();
+    for k in 0..surfaces {
+        let mine: Vec<_> = rows.iter().filter(|r| r.surface == k).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let n = mine.len() as f64;
+        let (e, d, l) = mine.iter().fold((0.0, 0.0, 0.0), |a, r| (a.0 + r.exact, a.1 + r.delivered, a.2 + r.linked));
+        let mut by_source = vec![0.0f64; surfaces];
+        for r in &mine {
+            for &(j, m) in &r.missing {
+                by_source[j] += m / n;
+            }
+        }
+        let worst: Vec<String> =
+            by_source.iter().enumerate().filter(|x| x.1.abs() > 1e-5).map(|(j, m)| format!("{j}:{m:.4}")).collect();
+        println!(
+            "coverage receiver surface {k}: {} leaves, mean F exact {:.4}, covered {:.4}, linked {:.4}; uncovered by source [{}]",
+            mine.len(),
+            e / n,
+            d / n,
+            l / n,
+            worst.join(" ")
+        );
+    }
 }

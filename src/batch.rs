@@ -97,17 +97,6 @@ impl From<manifest::ResumeError> for Failure {
     }
 }
 
-/// Parses `K/N` (0 ≤ K < N).
-pub fn parse_shard(text: &str) -> Result<(usize, usize), String> {
-    let (k, n) = text.split_once('/').ok_or_else(|| format!("--shard must be K/N, got `{text}`"))?;
-    let k: usize = k.trim().parse().map_err(|_| format!("--shard: `{k}` is not a job index"))?;
-    let n: usize = n.trim().parse().map_err(|_| format!("--shard: `{n}` is not a shard count"))?;
-    if n == 0 || k >= n {
-        return Err(format!("--shard K/N needs 0 ≤ K < N, got {k}/{n}"));
-    }
-    Ok((k, n))
-}
-
 /// The 1-based line of byte `offset` in `text`.
 fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
@@ -133,7 +122,8 @@ pub fn run(args: &Settings, progress: &Progress) -> Result<(), Failure> {
         return Err(Failure::input(anyhow::anyhow!("{}: no [[job]] entries", args.jobs.display())));
     }
     let keys = job_keys(&text, &args.jobs)?;
-    let shard = args.shard.as_deref().map(parse_shard).transpose().map_err(|e| Failure::input(anyhow::anyhow!(e)))?;
+    let shard =
+        args.shard.as_deref().map(run::parse_shard).transpose().map_err(|e| Failure::input(anyhow::anyhow!(e)))?;
     let manifest_path = args.manifest.clone().unwrap_or_else(|| {
         let stem = args.jobs.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "jobs".into());
         args.jobs.with_file_name(format!("{stem}.manifest.json"))

@@ -183,7 +183,7 @@ pub struct SolveArgs {
 }
 
 fn parse_shard_arg(text: &str) -> Result<Shard, String> {
-    let (index, count) = batch::parse_shard(text)?;
+    let (index, count) = run::parse_shard(text)?;
     let index = u32::try_from(index).map_err(|_| format!("--shard: {index} is too large"))?;
     let count = u32::try_from(count).map_err(|_| format!("--shard: {count} is too large"))?;
     Ok(Shard { index, count })

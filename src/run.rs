@@ -415,6 +415,17 @@ fn load_textures(scene: &SceneDescription, progress: &Progress) -> SceneTextures
     textures
 }
 
+/// Parses a `--shard K/N` argument (0 ≤ K < N) of any front end.
+pub fn parse_shard(text: &str) -> Result<(usize, usize), String> {
+    let (k, n) = text.split_once('/').ok_or_else(|| format!("--shard must be K/N, got `{text}`"))?;
+    let k: usize = k.trim().parse().map_err(|_| format!("--shard: `{k}` is not a job index"))?;
+    let n: usize = n.trim().parse().map_err(|_| format!("--shard: `{n}` is not a shard count"))?;
+    if n == 0 || k >= n {
+        return Err(format!("--shard K/N needs 0 ≤ K < N, got {k}/{n}"));
+    }
+    Ok((k, n))
+}
+
 /// Checks that `output`'s directory exists, before any work.
 pub fn check_output_directory(output: &Path) -> Result<(), Failure> {
     let dir = output.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));

@@ -12,6 +12,7 @@ use radray::scene::{DirectMode, FilterKind, SceneDescription};
 use radray::trace::TraceMode;
 use radray::transport::photons::RunPhotons;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -96,12 +97,30 @@ fn furnace_is_two_everywhere_in_both_modes() {
     }
 }
 
+/// The two canonical Cornell boxes at the default preset with per-pixel direct light, each as
+/// (reference name, radiosity-mode image, final image) from one radiosity solution. Both Cornell tests
+/// read it: the radiosity mode does not depend on the direct estimator, so one pass one per scene
+/// serves both, solved once per test binary.
+fn cornell_images() -> &'static [(&'static str, Image, Image)] {
+    static IMAGES: OnceLock<Vec<(&'static str, Image, Image)>> = OnceLock::new();
+    IMAGES.get_or_init(|| {
+        [("cornell_box.toml", "cornell_original"), ("cornell_empty.toml", "cornell_empty")]
+            .into_iter()
+            .map(|(scene, reference_name)| {
+                let mut s = load(scene);
+                s.render.direct = DirectMode::Pixel;
+                let [radiosity, final_]: [Image; 2] =
+                    render(&s, &[TraceMode::Radiosity, TraceMode::Final]).try_into().unwrap();
+                (reference_name, radiosity, final_)
+            })
+            .collect()
+    })
+}
+
 #[test]
 fn cornell_boxes_in_radiosity_mode_match_the_path_tracer_at_64_spp() {
     // Bounds: the path tracer's own error at 64 samples per pixel (references/README.md).
-    for (scene, reference_name) in [("cornell_box.toml", "cornell_original"), ("cornell_empty.toml", "cornell_empty")] {
-        let s = load(scene);
-        let image = &render(&s, &[TraceMode::Radiosity])[0];
+    for (reference_name, image, _) in cornell_images() {
         assert_close(&format!("{reference_name}.radiosity"), image, &reference(reference_name), 0.003, 0.065);
     }
 }
@@ -109,19 +128,21 @@ fn cornell_boxes_in_radiosity_mode_match_the_path_tracer_at_64_spp() {
 #[test]
 fn cornell_boxes_with_per_pixel_direct_light_match_the_path_tracer_at_256_spp() {
     // Bounds: the path tracer's own error at 256 samples per pixel (references/README.md).
-    for (scene, reference_name) in [("cornell_box.toml", "cornell_original"), ("cornell_empty.toml", "cornell_empty")] {
-        let mut s = load(scene);
-        s.render.direct = DirectMode::Pixel;
-        let image = &render(&s, &[TraceMode::Final])[0];
+    for (reference_name, _, image) in cornell_images() {
         assert_close(&format!("{reference_name}.final_pixel"), image, &reference(reference_name), 0.0007, 0.033);
     }
 }
 
 /// Final and pure-radiosity renders of the specular Cornell box with per-pixel direct light, and their
-/// metrics against the reference.
+/// metrics against the reference. The tests that use it check the Whitted pass's mirror and glass
+/// images and the issue's bound, not the default preset's accuracy (the Cornell boxes above do), so
+/// they leave out the default's gather second bounce and adaptive samples: a cheaper and slightly
+/// noisier final image held to the same bounds.
 fn specular_metrics(hemicube_resolution_px: u32) -> (Image, compare::Metrics, compare::Metrics) {
     let mut s = load("cornell_specular.toml");
     s.render.direct = DirectMode::Pixel;
+    s.render.near_bounce = 0.0;
+    s.image.adaptive_error = None;
     s.radiosity.hemicube_resolution_px = hemicube_resolution_px;
     let mut images = render(&s, &[TraceMode::Final, TraceMode::Radiosity]);
     let r = reference("cornell_specular");
@@ -154,8 +175,9 @@ fn specular_cornell_box_final_is_within_the_issue_bound() {
     // Bound from issue 5, over every pixel (nothing masked). The reference's caustics reach radray as
     // light traced from the emitter through the spheres (`trace::caustics`): pass one's extended form
     // factors to the emitter come from those photons, and pass two sharpens them per pixel by density
-    // estimation. Measured 0.00050 (0.0075 before, when the caustic came from hemicube paths at element
-    // resolution).
+    // estimation. Measured 0.00157 at `specular_metrics`'s settings (session 6); 0.00050 when the
+    // caustic photons landed, at that time's settings; 0.0075 before, when the caustic came from
+    // hemicube paths at element resolution.
     let (image, final_, radiosity) = specular_metrics(256);
     println!(
         "cornell_specular (hemicube 256): final relMSE {:.5} MARE {:.4}, radiosity relMSE {:.5} MARE {:.4}",

@@ -68,7 +68,7 @@ fn pixel_irradiance(direct: &DirectLight, sampler: &mut Sampler, p: Vec3, spp: u
     let mut sum = 0.0f64;
     for s in 0..spp {
         sampler.start_sample(s);
-        sum += direct.estimate(p, Vec3::Z, None, sampler, &mut counts).irradiance.x as f64;
+        sum += direct.estimate(direct.light_samples(), p, Vec3::Z, None, sampler, &mut counts).irradiance.x as f64;
     }
     sum / spp as f64
 }
@@ -253,7 +253,8 @@ fn highlight_by_quadrature(p: Vec3, mirror: Vec3, exponent: f32) -> f64 {
 #[test]
 fn highlight_weighed_by_multiple_importance_sampling_is_unbiased() {
     let setup = Setup::new(&lamp_scene(), 10.0);
-    let direct = setup.direct(4);
+    let light_samples = 4;
+    let direct = setup.direct(light_samples);
     // Mirror directions just past the lamp's edge and into it, broad and sharp lobes, so that both
     // strategies contribute (lobe rays that miss the lamp, light samples outside the lobe).
     let (past_edge, inside) = (vec3(0.4, 0.1, 1.0).normalize(), vec3(-0.1, 0.2, 1.0).normalize());
@@ -265,7 +266,14 @@ fn highlight_weighed_by_multiple_importance_sampling_is_unbiased() {
             .map(|i| {
                 let mut sampler = Sampler::pixel(17, i);
                 sampler.start_sample(0);
-                let e = direct.estimate(RECEIVER, Vec3::Z, Some((mirror, exponent)), &mut sampler, &mut counts);
+                let e = direct.estimate(
+                    light_samples,
+                    RECEIVER,
+                    Vec3::Z,
+                    Some((mirror, exponent)),
+                    &mut sampler,
+                    &mut counts,
+                );
                 e.highlight.x as f64
             })
             .collect();

@@ -207,8 +207,7 @@ fn near_edges() -> Vec<(Vec3, Vec3)> {
 
 /// The interpolated indirect irradiance of `setup`'s solution at (p, n): (B − E − B_direct)(p)/ρ.
 fn interpolated_indirect(setup: &Setup, p: Vec3, n: Vec3) -> f32 {
-    // Slightly oblique: an axis-aligned ray starting on a node's flat bound can slip past it.
-    let dir = (-n + Vec3::splat(1e-3)).normalize();
+    let dir = -n;
     let hit = setup.accel.closest_hit(p - dir * 1e-2, dir, 0.0, 1.0).unwrap_or_else(|| panic!("{p} lies on no wall"));
     let hit = radray::transport::SurfaceHit::new(&setup.mesh, &hit, dir);
     let element = hit.element.unwrap() as usize;

@@ -368,3 +368,56 @@ fn element_mean_albedo_equals_the_exact_average_over_a_known_texture() {
     let wrapped = t.mean_over_triangle(Vec2::new(1.0, 0.0), Vec2::new(2.0, 0.0), Vec2::new(2.0, 1.0));
     assert_relative_eq!(wrapped.x as f64, sum / 8.0, max_relative = 1e-6);
 }
+
+/// Σ w(i, j)·t(i, j) / Σ w over an n×n level whose texel (i, j) (row j from the top) holds `value`,
+/// with w = 1 for i + j ≥ n, ½ on the anti-diagonal i + j = n − 1, else 0: the exact area average over
+/// the lower-right half triangle in texel space (y down), uv (0, 0), (1, 0), (1, 1).
+fn lower_right_half_mean(n: usize, value: impl Fn(usize, usize) -> f64) -> f64 {
+    let mut sum = 0.0f64;
+    for j in 0..n {
+        for i in 0..n {
+            let weight = if i + j >= n {
+                1.0
+            } else if i + j + 1 == n {
+                0.5
+            } else {
+                0.0
+            };
+            sum += weight * value(i, j);
+        }
+    }
+    sum / (n * n) as f64 * 2.0
+}
+
+#[test]
+fn a_large_triangles_mean_is_the_exact_average_of_the_mip_level_matched_to_its_footprint() {
+    // 64×64 texels, t(i, j) = (7i + 13j) mod 17 + (i·j mod 5)/4: no two neighbours alike. The lower-right
+    // half triangle's bounding box covers 64² = 4096 texels of level 0, over MEAN_TEXEL_BUDGET (1024),
+    // and 32² = 1024 of level 1: its mean is the exact area average of level 1's texels, each the exact
+    // mean of a 2×2 block of level 0. Only the diagonal texels differ from the level-0 average.
+    let n = 64usize;
+    let value = |i: usize, j: usize| ((7 * i + 13 * j) % 17) as f64 + ((i * j) % 5) as f64 / 4.0;
+    let texels: Vec<Vec4> = (0..n * n).map(|k| Vec4::new(value(k % n, k / n) as f32, 0.0, 0.0, 1.0)).collect();
+    let t = Texture::from_linear(n as u32, n as u32, texels, false);
+    assert_eq!(radray::material::texture::MEAN_TEXEL_BUDGET, 1024.0);
+    let (a, b, c, d) = (Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0));
+    assert_eq!(t.mean_level(a, b, c), 1);
+    let level1 = |i: usize, j: usize| {
+        (value(2 * i, 2 * j) + value(2 * i + 1, 2 * j) + value(2 * i, 2 * j + 1) + value(2 * i + 1, 2 * j + 1)) / 4.0
+    };
+    assert_relative_eq!(t.mean_over_triangle(a, b, c).x as f64, lower_right_half_mean(32, level1), max_relative = 1e-6);
+    // Edges on level-1 texel borders: the two halves of the square average to the exact level-0 mean.
+    let exact: f64 = (0..n * n).map(|k| value(k % n, k / n)).sum::<f64>() / (n * n) as f64;
+    let halves = t.mean_over_triangle(a, b, c).x as f64 + t.mean_over_triangle(a, c, d).x as f64;
+    assert_relative_eq!(halves / 2.0, exact, max_relative = 1e-6);
+    // Within the budget (bounding box 16² texels of level 0), the exact level-0 average.
+    let quarter = [Vec2::new(0.0, 0.75), Vec2::new(0.25, 0.75), Vec2::new(0.25, 1.0)];
+    assert_eq!(t.mean_level(quarter[0], quarter[1], quarter[2]), 0);
+    let m = t.mean_over_triangle(quarter[0], quarter[1], quarter[2]).x as f64;
+    assert_relative_eq!(m, lower_right_half_mean(16, value), max_relative = 1e-6);
+    // Four tiles of a 256² texture (1024² texels at level 0): level 5, whose 8×8 texels a tile holds,
+    // is the finest within budget (32² texels), so one mean visits at most 1024 texels.
+    let big = Texture::from_linear(256, 256, vec![Vec4::ONE; 256 * 256], false);
+    assert_eq!(big.mean_level(Vec2::ZERO, Vec2::new(4.0, 0.0), Vec2::new(4.0, 4.0)), 5);
+    assert_relative_eq!(big.mean_over_triangle(Vec2::ZERO, Vec2::new(4.0, 0.0), Vec2::new(4.0, 4.0)).x, 1.0);
+}

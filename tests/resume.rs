@@ -1,6 +1,7 @@
 //! Resumable and sharded pass one: an interrupted solve resumes from its checkpoint to the bytes of an
 //! uninterrupted one, a damaged or stale checkpoint is ignored with a warning, and the parts of a
-//! sharded solve merge to the bytes of a single-machine solve, with every shard required once.
+//! sharded solve merge to the bytes of a single-machine solve, with every shard required once. The
+//! hierarchical method resumes the same way from its log of link estimates.
 
 mod common;
 
@@ -12,10 +13,12 @@ use std::time::Duration;
 use common::radray;
 use radray::interrupt::{Cancel, SIGINT, SIGTERM};
 use radray::progress::Progress;
+use radray::radiosity::hierarchy::estimates::CHUNK_LINKS;
+use radray::radiosity::hierarchy::links_file;
 use radray::radiosity::matrix::rows_file::{self, RowsHeader, RowsKind};
 use radray::radiosity::resume::{checkpoint_path, Resume};
 use radray::run::{Job, Outcome, Runner, Work};
-use radray::scene::{Overrides, Quality};
+use radray::scene::{MethodChoice, Overrides, Quality};
 
 fn cornell_box() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box.toml")
@@ -197,4 +200,135 @@ fn sigint_to_the_binary_saves_a_checkpoint_exits_130_and_the_rerun_gives_the_sam
     let fresh = run(&reference).output().unwrap();
     assert!(fresh.status.success());
     assert!(std::fs::read(&output).unwrap() == std::fs::read(&reference).unwrap(), "resumed bytes differ");
+}
+
+/// A hierarchical solve of the Cornell box at the preview quality.
+fn hierarchical_solve(output: &Path) -> Job {
+    let mut job = preview_solve(output);
+    job.overrides.method = Some(MethodChoice::Hierarchical);
+    job
+}
+
+fn uninterrupted_hierarchical_solution(dir: &Path) -> (Vec<u8>, usize) {
+    let path = dir.join("reference_hierarchy.radsol");
+    let mut outcome = Outcome::default();
+    Runner::single().run(&hierarchical_solve(&path), &Progress::hidden(), &mut outcome).unwrap();
+    let estimated = outcome.stats.pass_one.hierarchy.expect("hierarchy statistics").links_estimated;
+    (std::fs::read(path).unwrap(), estimated as usize)
+}
+
+#[test]
+fn a_hierarchical_solve_interrupted_during_refinement_resumes_to_the_bytes_of_an_uninterrupted_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let (reference, estimated) = uninterrupted_hierarchical_solution(dir.path());
+    assert!(estimated > 3 * CHUNK_LINKS, "enough estimates to stop part-way: {estimated}");
+    let output = dir.path().join("cornell.radsol");
+    let checkpoint = checkpoint_path(&output);
+    // Stopped after two chunks of link estimates (the hook counts estimates as the matrix counts rows).
+    let interrupted = Resume {
+        checkpoint: Some(checkpoint.clone()),
+        interval: Duration::ZERO,
+        cancel: Cancel::after_rows(2 * CHUNK_LINKS, SIGTERM),
+        ..Default::default()
+    };
+    let mut outcome = Outcome::default();
+    let failure = Runner::resumable(interrupted).run(&hierarchical_solve(&output), &Progress::hidden(), &mut outcome);
+    let failure = failure.expect_err("the run is cancelled during refinement");
+    assert_eq!(failure.exit_code, 143, "{failure}");
+    assert!(failure.to_string().contains("cornell.radsol.partial"), "{failure}");
+    assert!(!output.exists(), "no solution from an interrupted run");
+    let (header, entries) = links_file::read(&checkpoint).unwrap();
+    assert_eq!(header.kind, RowsKind::HierarchyCheckpoint);
+    assert!(entries.len() >= 2 * CHUNK_LINKS && entries.len() < estimated, "{} of {estimated}", entries.len());
+
+    let resumed = Resume { checkpoint: Some(checkpoint.clone()), interval: Duration::ZERO, ..Default::default() };
+    let mut outcome = Outcome::default();
+    Runner::resumable(resumed).run(&hierarchical_solve(&output), &Progress::hidden(), &mut outcome).unwrap();
+    let stats = outcome.stats.pass_one.resume.expect("resume statistics");
+    assert_eq!(stats.rows_resumed, entries.len(), "{stats:?}");
+    assert!(stats.rows_computed > 0, "{stats:?}");
+    assert!(!checkpoint.exists(), "the checkpoint is removed once the solution is written");
+    assert!(std::fs::read(&output).unwrap() == reference, "resumed bytes differ");
+}
+
+#[test]
+fn a_hierarchical_solve_stopped_during_its_sweeps_resumes_without_estimating_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let (reference, estimated) = uninterrupted_hierarchical_solution(dir.path());
+    let output = dir.path().join("cornell.radsol");
+    let checkpoint = checkpoint_path(&output);
+    // The budget runs out with the last estimate: the stop is seen at the next sweep.
+    let interrupted = Resume {
+        checkpoint: Some(checkpoint.clone()),
+        interval: Duration::from_secs(3600),
+        cancel: Cancel::after_rows(estimated, SIGINT),
+        ..Default::default()
+    };
+    let failure =
+        Runner::resumable(interrupted).run(&hierarchical_solve(&output), &Progress::hidden(), &mut Outcome::default());
+    assert_eq!(failure.expect_err("cancelled").exit_code, 130);
+    let (_, entries) = links_file::read(&checkpoint).unwrap();
+    assert_eq!(entries.len(), estimated, "every estimate is in the checkpoint written at the stop");
+
+    let resumed = Resume { checkpoint: Some(checkpoint.clone()), interval: Duration::ZERO, ..Default::default() };
+    let mut outcome = Outcome::default();
+    Runner::resumable(resumed).run(&hierarchical_solve(&output), &Progress::hidden(), &mut outcome).unwrap();
+    let stats = outcome.stats.pass_one.resume.expect("resume statistics");
+    assert_eq!((stats.rows_resumed, stats.rows_computed), (estimated, 0), "{stats:?}");
+    assert!(std::fs::read(&output).unwrap() == reference, "resumed bytes differ");
+}
+
+#[test]
+fn a_damaged_or_foreign_hierarchical_checkpoint_is_ignored_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let (reference, _) = uninterrupted_hierarchical_solution(dir.path());
+    let output = dir.path().join("cornell.radsol");
+    let checkpoint = checkpoint_path(&output);
+    let resume = Resume {
+        checkpoint: Some(checkpoint.clone()),
+        interval: Duration::ZERO,
+        cancel: Cancel::after_rows(CHUNK_LINKS, SIGINT),
+        ..Default::default()
+    };
+    let failure =
+        Runner::resumable(resume).run(&hierarchical_solve(&output), &Progress::hidden(), &mut Outcome::default());
+    assert_eq!(failure.expect_err("cancelled").exit_code, 130);
+    let bytes = std::fs::read(&checkpoint).unwrap();
+    let args = preview_args(output.to_str().unwrap(), &["--method", "hierarchical"]);
+    for (damage, expected) in [(&bytes[..bytes.len() / 2], "damaged"), (&b"RADRAYRW"[..], "damaged")] {
+        std::fs::write(&checkpoint, damage).unwrap();
+        let out = radray(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert!(stderr.contains("warning: ignoring the checkpoint") && stderr.contains(expected), "{stderr}");
+        assert!(std::fs::read(&output).unwrap() == reference, "bytes differ after ignoring the checkpoint");
+    }
+    // A matrix run's checkpoint beside the same output is another kind of file: ignored too.
+    let rows = radray::radiosity::matrix::PartialRows {
+        ff: radray::radiosity::matrix::FormFactors::from_rows(vec![vec![(1, 0.5)], vec![]]),
+        done: vec![true, true],
+        ..Default::default()
+    };
+    let header =
+        RowsHeader { kind: RowsKind::Checkpoint, fingerprint: 1, form_factor_key: 2, shard_index: 0, shard_count: 1 };
+    rows_file::write(&checkpoint, &header, &rows, 2).unwrap();
+    let out = radray(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning: ignoring the checkpoint") && stderr.contains("form-factor checkpoint"),
+        "{stderr}"
+    );
+    assert!(std::fs::read(&output).unwrap() == reference);
+}
+
+#[test]
+fn a_hierarchical_scene_is_refused_by_shard_and_merge_with_a_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("part.0").display().to_string();
+    let out = radray(&preview_args(&target, &["--method", "hierarchical", "--shard", "0/3"]));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("sharding and merging need the stored matrix"), "{stderr}");
+    assert!(!Path::new(&target).exists(), "nothing written");
 }

@@ -114,7 +114,8 @@ impl MaterialMaps {
     }
 
     /// Pass one: an element's mean albedo ρ̄ₑ = (1/A) ∫_△ min(Kd · t(u), ρ_max) du over its uv
-    /// triangle (exact area average, see `Texture::mean_over_triangle_of`); Kd without a texture.
+    /// triangle (exact area average on the mip level matched to its footprint, see
+    /// `Texture::mean_over_triangle_of`); Kd without a texture.
     pub fn mean_albedo_over(&self, uv0: Vec2, uv1: Vec2, uv2: Vec2) -> Vec3 {
         match &self.diffuse {
             Some(t) => {
@@ -150,7 +151,7 @@ impl MaterialMaps {
     }
 
     /// Pass one: mean opacity ᾱ = (1/A) ∫_△ clamp(α(u), 0, 1) du over a uv triangle (exact area
-    /// average, `Texture::mean_over_triangle_of`); 1 without a cut-out map.
+    /// average on the footprint's mip level, `Texture::mean_over_triangle_of`); 1 without a cut-out map.
     pub fn mean_opacity_over(&self, uv0: Vec2, uv1: Vec2, uv2: Vec2) -> f32 {
         match &self.opacity {
             Some((t, channel)) => {

@@ -5,7 +5,8 @@
 //! # Textures in the two passes (the classic two-pass texture ratio)
 //! Radiosity is solved per element, so pass one cannot see texture detail finer than an element.
 //! - **Pass one** uses each element's *mean albedo* ρ̄ₑ: the exact area average of Kd × texture over
-//!   the element's uv triangle, in linear space (`MaterialMaps::mean_albedo_over`). The solver is
+//!   the element's uv triangle, in linear space, on the mip level matched to the triangle's footprint
+//!   (`MaterialMaps::mean_albedo_over`, `Texture::mean_over_triangle`). The solver is
 //!   unchanged: it sees ρ̄ₑ where it saw Kd.
 //! - **Pass two** shows the texture. At a diffuse hit with texel albedo ρ(x) (`MaterialMaps::albedo_at`,
 //!   trilinear with the ray's footprint):

@@ -16,8 +16,12 @@ use std::sync::Arc;
 pub const MAX_TEXTURE_SIDE_PX: u32 = 16384;
 const MAX_DECODE_BYTES: u64 = 1 << 30;
 
-/// Most texels `mean_over_triangle` visits at level 0 before moving to a coarser level.
-pub const MEAN_TEXEL_BUDGET: f64 = (1u64 << 20) as f64;
+/// Most texels of one pyramid level that the bounding box of a uv triangle may cover when
+/// `mean_over_triangle` integrates over that level: the mean is taken at the finest level within this
+/// budget (the level matched to the triangle's texel footprint), so one mean visits at most this many
+/// texels, whatever the triangle's size. 32×32: a coarse level's texels are exact averages of level 0,
+/// so only the texels cut by the triangle's edges (about a third of them here) differ from level 0.
+pub const MEAN_TEXEL_BUDGET: f64 = 1024.0;
 
 /// Why a texture file could not be used (the caller warns and falls back to the constant).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -242,67 +246,87 @@ impl Texture {
         self.bilinear(uv, lower).lerp(self.bilinear(uv, lower + 1), t)
     }
 
-    /// The exact area average of the texture over the uv triangle (u₀, u₁, u₂), in linear space:
-    /// T̄ = (1/A) Σᵢⱼ tᵢⱼ · area(△ ∩ texel ij), with the texture read as constant over each texel
-    /// (box reconstruction) and wrapping. Each texel's share is found by clipping the triangle to the
-    /// texel's square (Sutherland–Hodgman), so the result is exact up to f64 rounding (≈1e-12
-    /// relative). For an affine uv mapping (any triangle) the uv-area average is the surface-area
-    /// average. A triangle spanning more than `MEAN_TEXEL_BUDGET` texels is integrated at the first
-    /// coarser level within budget: there texels fully inside the triangle are still exact averages of
-    /// level 0, and the error is confined to the coarse texels cut by its edges. A triangle with zero
-    /// uv area returns the bilinear value at its centroid (the limit of the average).
+    /// The area average of the texture over the uv triangle (u₀, u₁, u₂), in linear space, at the pyramid
+    /// level L matched to its footprint (`mean_level`: the finest level whose texels the triangle's
+    /// bounding box covers at most `MEAN_TEXEL_BUDGET` of):
+    /// T̄ = (1/A) Σᵢⱼ tᴸᵢⱼ · area(△ ∩ texel ij of level L), with the texture read as constant over each
+    /// texel (box reconstruction) and wrapping. Each texel's share is found by clipping the triangle to
+    /// the texel's square (Sutherland–Hodgman), so T̄ is the exact average of level L's texels up to f64
+    /// rounding (≈1e-12 relative). Level L's texels are exact box averages of level 0's
+    /// (`downsample`), so T̄ is the exact level-0 average whenever L = 0 (a triangle within budget) or
+    /// the triangle's edges follow level L's texel borders; otherwise only the level-L texels its edges
+    /// cut contribute their whole average rather than that of the part inside. For an affine uv
+    /// mapping (any triangle) the uv-area average is the surface-area average. A triangle with zero uv
+    /// area returns the bilinear value at its centroid (the limit of the average).
     pub fn mean_over_triangle(&self, uv0: Vec2, uv1: Vec2, uv2: Vec2) -> Vec4 {
         self.mean_over_triangle_of(uv0, uv1, uv2, |t| t)
     }
 
-    /// `mean_over_triangle` of a per-texel function f: (1/A) Σᵢⱼ f(tᵢⱼ) · area(△ ∩ texel ij). Used for
+    /// The pyramid level `mean_over_triangle` integrates the uv triangle at: the finest level l at which
+    /// its bounding box, widened to whole texels, covers at most `MEAN_TEXEL_BUDGET` texels (the
+    /// coarsest level if none does).
+    pub fn mean_level(&self, uv0: Vec2, uv1: Vec2, uv2: Vec2) -> usize {
+        let last = self.levels.len() - 1;
+        (0..last).find(|&l| self.texels_in_bounds(l, [uv0, uv1, uv2]) <= MEAN_TEXEL_BUDGET).unwrap_or(last)
+    }
+
+    /// Texels of level `level` in the whole-texel bounding box of the uv points.
+    fn texels_in_bounds(&self, level: usize, uv: [Vec2; 3]) -> f64 {
+        let (lo, hi) = bounds(&self.texel_points(level, uv));
+        (hi[0].ceil() - lo[0].floor()) * (hi[1].ceil() - lo[1].floor())
+    }
+
+    /// uv points in texel coordinates of level `level`: x = u·width, y = (1 − v)·height.
+    fn texel_points(&self, level: usize, uv: [Vec2; 3]) -> [[f64; 2]; 3] {
+        let l = &self.levels[level];
+        let (w, h) = (l.width_px as f64, l.height_px as f64);
+        uv.map(|p| [p.x as f64 * w, (1.0 - p.y as f64) * h])
+    }
+
+    /// `mean_over_triangle` of a per-texel function f: (1/A) Σᵢⱼ f(tᴸᵢⱼ) · area(△ ∩ texel ij). Used for
     /// the clamped product Kd·texel, whose average is not the product of averages.
     pub fn mean_over_triangle_of(&self, uv0: Vec2, uv1: Vec2, uv2: Vec2, f: impl Fn(Vec4) -> Vec4) -> Vec4 {
         let centroid = (uv0 + uv1 + uv2) / 3.0;
         if !centroid.is_finite() {
             return f(self.levels[0].texel(0, 0));
         }
-        let mut level = 0;
-        loop {
-            let l = &self.levels[level];
-            let (w, h) = (l.width_px as f64, l.height_px as f64);
-            let pts = [uv0, uv1, uv2].map(|p| [p.x as f64 * w, (1.0 - p.y as f64) * h]);
-            let (lo, hi) = bounds(&pts);
-            let count = (hi[0].ceil() - lo[0].floor()) * (hi[1].ceil() - lo[1].floor());
-            if count > MEAN_TEXEL_BUDGET && level + 1 < self.levels.len() {
-                level += 1;
+        let level = self.mean_level(uv0, uv1, uv2);
+        let l = &self.levels[level];
+        let pts = self.texel_points(level, [uv0, uv1, uv2]);
+        let (lo, hi) = bounds(&pts);
+        let area = polygon_area(&pts).abs();
+        if area <= 1e-12 {
+            return f(l.bilinear(centroid));
+        }
+        // Scratch polygons, reused for every row and texel: no allocation per texel.
+        let (mut half, mut strip, mut cell_half, mut cell) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut sum = [0.0f64; 4];
+        let mut covered = 0.0f64;
+        for j in lo[1].floor() as i64..hi[1].ceil() as i64 {
+            clip_into(&pts, 1, j as f64, true, &mut half);
+            clip_into(&half, 1, (j + 1) as f64, false, &mut strip);
+            if strip.len() < 3 {
                 continue;
             }
-            let area = polygon_area(&pts).abs();
-            if area <= 1e-12 {
-                return f(l.bilinear(centroid));
-            }
-            let mut sum = [0.0f64; 4];
-            let mut covered = 0.0f64;
-            for j in lo[1].floor() as i64..hi[1].ceil() as i64 {
-                let strip = clip(&clip(&pts, 1, j as f64, true), 1, (j + 1) as f64, false);
-                if strip.len() < 3 {
+            let (slo, shi) = bounds(&strip);
+            for i in slo[0].floor() as i64..shi[0].ceil() as i64 {
+                clip_into(&strip, 0, i as f64, true, &mut cell_half);
+                clip_into(&cell_half, 0, (i + 1) as f64, false, &mut cell);
+                if cell.len() < 3 {
                     continue;
                 }
-                let (slo, shi) = bounds(&strip);
-                for i in slo[0].floor() as i64..shi[0].ceil() as i64 {
-                    let cell = clip(&clip(&strip, 0, i as f64, true), 0, (i + 1) as f64, false);
-                    if cell.len() < 3 {
-                        continue;
-                    }
-                    let a = polygon_area(&cell).abs();
-                    let v = f(l.texel(i, j));
-                    for (s, x) in sum.iter_mut().zip(v.to_array()) {
-                        *s += a * x as f64;
-                    }
-                    covered += a;
+                let a = polygon_area(&cell).abs();
+                let v = f(l.texel(i, j));
+                for (s, x) in sum.iter_mut().zip(v.to_array()) {
+                    *s += a * x as f64;
                 }
+                covered += a;
             }
-            if covered <= 0.0 {
-                return f(l.bilinear(centroid));
-            }
-            return Vec4::from_array(sum.map(|s| (s / covered) as f32));
         }
+        if covered <= 0.0 {
+            return f(l.bilinear(centroid));
+        }
+        Vec4::from_array(sum.map(|s| (s / covered) as f32))
     }
 }
 
@@ -318,11 +342,11 @@ fn polygon_area(pts: &[[f64; 2]]) -> f64 {
     0.5 * (0..n).map(|k| pts[k][0] * pts[(k + 1) % n][1] - pts[(k + 1) % n][0] * pts[k][1]).sum::<f64>()
 }
 
-/// One Sutherland–Hodgman step: keeps the part of a convex polygon with coordinate `axis` ≥ `bound`
-/// (`keep_above`) or ≤ `bound`.
-fn clip(pts: &[[f64; 2]], axis: usize, bound: f64, keep_above: bool) -> Vec<[f64; 2]> {
+/// One Sutherland–Hodgman step into `out` (cleared first): keeps the part of a convex polygon with
+/// coordinate `axis` ≥ `bound` (`keep_above`) or ≤ `bound`.
+fn clip_into(pts: &[[f64; 2]], axis: usize, bound: f64, keep_above: bool, out: &mut Vec<[f64; 2]>) {
+    out.clear();
     let inside = |p: &[f64; 2]| if keep_above { p[axis] >= bound } else { p[axis] <= bound };
-    let mut out = Vec::with_capacity(pts.len() + 2);
     for k in 0..pts.len() {
         let (a, b) = (pts[k], pts[(k + 1) % pts.len()]);
         let (ia, ib) = (inside(&a), inside(&b));
@@ -336,7 +360,6 @@ fn clip(pts: &[[f64; 2]], axis: usize, bound: f64, keep_above: bool) -> Vec<[f64
             out.push(p);
         }
     }
-    out
 }
 
 /// Loads each (file, encoding) once. A file that cannot be used is remembered too, and every request

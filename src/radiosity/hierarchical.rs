@@ -16,11 +16,15 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::fingerprint::Fnv1a64;
-use super::hierarchy::{self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyParams, HierarchyProgress};
+use super::hierarchy::estimates::{EstimateHooks, EstimateLog};
+use super::hierarchy::{
+    self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyError, HierarchyParams, HierarchyProgress,
+};
 use super::leaf_mesh::{self, LeafGeometry, LeafMeshBuild};
 use super::method::{MethodError, PassOne, PassOneMethod, Reuse};
+use super::resume::{self, Checkpointer, SceneKeys};
 use super::solution::Solution;
-use super::stats::{PassOneStats, SolveStats};
+use super::stats::{PassOneStats, ResumeStats, SolveStats};
 use crate::accel::Accel;
 use crate::material::SceneTextures;
 use crate::mesh::Mesh;
@@ -234,6 +238,12 @@ impl PassOneMethod for Hierarchical {
         false
     }
 
+    /// The log of link estimates (`hierarchy::estimates`) is the checkpoint: a resumed solve replays
+    /// the refinement from it and computes only the estimates it lacks.
+    fn checkpoints(&self) -> bool {
+        true
+    }
+
     /// The hierarchy's minimum (input triangles, clusters, first links) against its share of
     /// `memory`, from the scene alone; refinement then stays within the budget by keeping coarser
     /// links.
@@ -272,8 +282,39 @@ impl PassOneMethod for Hierarchical {
         // Only a batch keeps hierarchies, so only a batch needs their key.
         let key = reuse.keeps().then(|| link_key(scene, &params, &mesh.textures));
         let kept = key.and_then(|key| reuse.hierarchy_links(key));
-        let solved =
-            hierarchy::solve_reusing(scene, mesh.textures.clone(), &params, kept.as_deref(), &mut |p| match p {
+        let resume = reuse.resume.clone();
+        let keys = SceneKeys {
+            fingerprint: scene_fingerprint(scene, &params, &mesh.textures),
+            form_factor_key: link_key(scene, &params, &mesh.textures),
+        };
+        let load_start = Instant::now();
+        let mut log = match &resume.checkpoint {
+            Some(path) => resume::load_hierarchy_checkpoint(path, keys, progress)
+                .map_or_else(EstimateLog::recording, EstimateLog::resumed),
+            None => EstimateLog::default(),
+        };
+        let logged = log.entries.len();
+        let load_seconds = load_start.elapsed().as_secs_f64();
+        let mut checkpointer =
+            resume.checkpoint.as_ref().map(|path| Checkpointer::for_hierarchy(path.clone(), keys, resume.interval));
+        let cancel = &resume.cancel;
+        let stop = || cancel.is_requested();
+        let mut after_chunk = |log: &EstimateLog, computed: usize| {
+            (0..computed).for_each(|_| cancel.row_done());
+            if let Some(checkpointer) = checkpointer.as_mut() {
+                if checkpointer.due() {
+                    checkpointer.write_log(log);
+                }
+            }
+        };
+        let mut hooks = EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk };
+        let solved = hierarchy::solve_logged(
+            scene,
+            mesh.textures.clone(),
+            &params,
+            kept.as_deref(),
+            &mut hooks,
+            &mut |p| match p {
                 HierarchyProgress::Refining { pass, round, links, nodes } => {
                     memory_bytes = nodes * NODE_BYTES + links * LINK_BYTES;
                     stage.set_position(pass.saturating_sub(1) as u64);
@@ -289,8 +330,30 @@ impl PassOneMethod for Hierarchical {
                         memory_bytes as f64 / (1 << 20) as f64
                     ));
                 }
-            })
-            .map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?;
+            },
+        );
+        if log.diverged {
+            progress.note(&format!(
+                "warning: the checkpoint's link estimates disagree with this refinement after {} of {logged}; \
+                 computing the rest afresh",
+                log.replayed().saturating_sub(log.computed)
+            ));
+        }
+        let solved = match solved {
+            Err(HierarchyError::Stopped) => {
+                if let Some(checkpointer) = checkpointer.as_mut() {
+                    checkpointer.write_log(&log);
+                    if let Some(e) = checkpointer.error.take() {
+                        progress.note(&format!("warning: cannot write the checkpoint: {e}"));
+                    }
+                }
+                let signal = cancel.signal().unwrap_or(crate::interrupt::SIGINT);
+                return Err(MethodError::Interrupted { signal, checkpoint: resume.checkpoint.clone() });
+            }
+            other => {
+                other.map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?
+            }
+        };
         let (solved, structure) = solved;
         let reused = kept.is_some();
         drop(kept);
@@ -338,12 +401,31 @@ impl PassOneMethod for Hierarchical {
             solve_stats,
         );
         direct_stage.finish(&format!("{DIRECT_SAMPLES} shadow rays per leaf"));
+        let mut resume_stats = None;
+        if let Some(checkpointer) = checkpointer.as_mut() {
+            // A run long enough for one periodic write (or stopped now) keeps its estimates for the
+            // stages after pass one.
+            if cancel.is_requested() || checkpointer.writes > 0 || checkpointer.due() {
+                checkpointer.write_log(&log);
+            }
+            if let Some(e) = checkpointer.error.take() {
+                progress.note(&format!("warning: cannot write the checkpoint: {e}"));
+            }
+            resume_stats = Some(ResumeStats {
+                rows_resumed: log.replayed().saturating_sub(log.computed),
+                rows_computed: log.computed,
+                load_seconds,
+                checkpoint_writes: checkpointer.writes,
+                checkpoint_seconds: checkpointer.write_seconds,
+            });
+        }
         let stats = PassOneStats {
             elements: leaf_mesh.elements.len(),
             solver: Some(self.name()),
             sweeps: h.sweeps,
             solve_seconds,
             hierarchy: Some(h.clone()),
+            resume: resume_stats,
             ..Default::default()
         };
         Ok(PassOne { mesh: leaf_mesh, solution, stats, reused_form_factors: reused })

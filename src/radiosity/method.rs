@@ -34,7 +34,7 @@ pub enum MethodError {
     #[error("{scene}: {source}")]
     Hierarchy { scene: String, source: HierarchyError },
     #[error("interrupted by {}{}", crate::interrupt::signal_name(*signal), match checkpoint {
-        Some(path) => format!("; the finished form-factor rows are saved in {}: run the same command again to resume", path.display()),
+        Some(path) => format!("; the finished pass-one work (form-factor rows or link estimates) is saved in {}: run the same command again to resume", path.display()),
         None => String::new(),
     })]
     Interrupted { signal: usize, checkpoint: Option<std::path::PathBuf> },
@@ -515,7 +515,9 @@ pub fn scene_keys(scene: &SceneDescription, mesh: &Mesh) -> SceneKeys {
 /// is the stored matrix, else `ShardError::NotMatrix`.
 pub fn matrix_for_shards(scene: &SceneDescription) -> Result<FullMatrix, ShardError> {
     let method = for_scene(scene);
-    if method.checkpoints() && scene.radiosity.store_form_factors {
+    // The full matrix is the one method on the uniform mesh that checkpoints (the hierarchy
+    // checkpoints too, but cannot shard: see the README).
+    if method.uses_uniform_mesh() && method.checkpoints() && scene.radiosity.store_form_factors {
         Ok(FullMatrix { solver: scene.radiosity.solver })
     } else {
         Err(ShardError::NotMatrix { scene: scene.path.display().to_string(), method: method.name() })

@@ -1,11 +1,14 @@
 //! Pass one across processes: the checkpoint a run keeps beside its output (`OUT.partial`, the rows
 //! finished so far, rewritten at most every `CHECKPOINT_INTERVAL`), the shard a run computes
 //! (`--shard K/N`: every N-th group of receivers) and the parts a merge joins (`--merge`). All of
-//! them are row-block files (`matrix::rows_file`), checked against the scene's keys.
+//! them are row-block files (`matrix::rows_file`), checked against the scene's keys. A hierarchical
+//! solve's checkpoint is its log of link estimates in the same container (`hierarchy::links_file`).
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use super::hierarchy::estimates::{EstimateLog, LoggedEstimate};
+use super::hierarchy::links_file;
 use super::matrix::rows_file::{self, RowsFileError, RowsHeader, RowsKind};
 use super::matrix::{FormFactors, PartialRows};
 use crate::interrupt::Cancel;
@@ -80,33 +83,60 @@ pub struct SceneKeys {
 /// The checkpoint at `path` if it belongs to this scene and shard; a damaged or stale one is ignored
 /// with a warning (and overwritten by the next checkpoint), a missing one silently.
 pub fn load_checkpoint(path: &Path, keys: SceneKeys, shard: Shard, progress: &Progress) -> Option<PartialRows> {
+    load(path, RowsKind::Checkpoint, keys, shard, progress, rows_file::read)
+}
+
+/// The payload `read` finds at `path` if the file is of `kind` and this run's; warns otherwise.
+fn load<T>(
+    path: &Path,
+    kind: RowsKind,
+    keys: SceneKeys,
+    shard: Shard,
+    progress: &Progress,
+    read: impl FnOnce(&Path) -> Result<(RowsHeader, T), RowsFileError>,
+) -> Option<T> {
     if !path.exists() {
         return None;
     }
-    match rows_file::read(path) {
+    match read(path) {
         Err(e) => {
             progress.note(&format!("warning: ignoring the checkpoint: {e}; starting pass one afresh"));
             None
         }
-        Ok((header, rows)) => {
-            let matches = header.kind == RowsKind::Checkpoint
-                && header.fingerprint == keys.fingerprint
-                && header.form_factor_key == keys.form_factor_key
-                && (header.shard_index, header.shard_count) == (shard.index, shard.count);
-            if matches {
-                Some(rows)
-            } else {
-                progress.note(&format!(
-                    "warning: ignoring the checkpoint {}: it was made for another scene, settings or shard \
-                     (fingerprint {:016x}, this run {:016x}); starting pass one afresh",
-                    path.display(),
-                    header.fingerprint,
-                    keys.fingerprint
-                ));
-                None
-            }
-        }
+        Ok((header, payload)) => usable(path, &header, kind, keys, shard, progress).then_some(payload),
     }
+}
+
+/// Whether a checkpoint's header is this run's (kind, keys, shard); warns when it is not.
+fn usable(
+    path: &Path,
+    header: &RowsHeader,
+    kind: RowsKind,
+    keys: SceneKeys,
+    shard: Shard,
+    progress: &Progress,
+) -> bool {
+    let matches = header.kind == kind
+        && header.fingerprint == keys.fingerprint
+        && header.form_factor_key == keys.form_factor_key
+        && (header.shard_index, header.shard_count) == (shard.index, shard.count);
+    if !matches {
+        progress.note(&format!(
+            "warning: ignoring the checkpoint {}: it was made for another scene, settings or shard \
+             (fingerprint {:016x}, this run {:016x}); starting pass one afresh",
+            path.display(),
+            header.fingerprint,
+            keys.fingerprint
+        ));
+    }
+    matches
+}
+
+/// The link estimates of a hierarchical solve's checkpoint at `path` (to replay, see
+/// `hierarchy::estimates`) if it belongs to this scene and settings; a damaged or stale one is
+/// ignored with a warning, a missing one silently.
+pub fn load_hierarchy_checkpoint(path: &Path, keys: SceneKeys, progress: &Progress) -> Option<Vec<LoggedEstimate>> {
+    load(path, RowsKind::HierarchyCheckpoint, keys, Shard::WHOLE, progress, links_file::read)
 }
 
 /// Writes the checkpoint of a row computation when `CHECKPOINT_INTERVAL` has passed since the last
@@ -165,8 +195,26 @@ impl Checkpointer {
 
     /// Writes the checkpoint of matrix rows `ff`, of which `done` are finished, now.
     pub fn write_matrix(&mut self, ff: &FormFactors, done: &[bool]) {
+        let elements = self.elements;
+        self.timed(|path, header| rows_file::write_rows(path, header, ff, done, Default::default(), elements));
+    }
+
+    /// A checkpointer of a hierarchical solve (its log of link estimates).
+    pub fn for_hierarchy(path: PathBuf, keys: SceneKeys, interval: Duration) -> Self {
+        let mut checkpointer = Checkpointer::new(path, keys, Shard::WHOLE, 0, interval);
+        checkpointer.header.kind = RowsKind::HierarchyCheckpoint;
+        checkpointer
+    }
+
+    /// Writes a hierarchical solve's checkpoint now (see `for_hierarchy`).
+    pub fn write_log(&mut self, log: &EstimateLog) {
+        self.timed(|path, header| links_file::write(path, header, log));
+    }
+
+    /// Writes through `write`, timing it and keeping the first error.
+    fn timed(&mut self, write: impl FnOnce(&Path, &RowsHeader) -> Result<(), RowsFileError>) {
         let start = Instant::now();
-        match rows_file::write_rows(&self.path, &self.header, ff, done, Default::default(), self.elements) {
+        match write(&self.path, &self.header) {
             Ok(()) => {
                 self.writes += 1;
                 self.write_seconds += start.elapsed().as_secs_f64();

@@ -74,6 +74,12 @@ impl<'a> DirectLight<'a> {
         DirectLight { mesh, accel, emitters, samples, offset }
     }
 
+    /// Shadow rays per estimate (and lobe rays per highlight) of the render settings
+    /// (`RenderParams::light_samples`).
+    pub fn light_samples(&self) -> u32 {
+        self.samples
+    }
+
     /// Shadow and highlight rays pass cut-outs, reading their finest texels.
     fn opaque_ray(&self) -> OpaqueRay<'a> {
         OpaqueRay { mesh: self.mesh, accel: self.accel, offset: self.offset, spread_rad: 0.0 }
@@ -84,7 +90,8 @@ impl<'a> DirectLight<'a> {
     }
 
     /// Light from the emitters at point `p` with unit normal `n` (on the side being shaded), with N =
-    /// `light_samples` shadow rays to points x_k drawn on the emitters with area density p_A(x_k)
+    /// `samples` shadow rays (the tracer passes [`DirectLight::light_samples`]; a final gather's
+    /// near bounce its own count) to points x_k drawn on the emitters with area density p_A(x_k)
     /// (triangle by power, then uniform on it; `Emitters::sample`) from one `Sampler::pattern_2d`:
     ///
     /// E ≈ (1/N) Σ_k V(p, x_k) L_e(x_k) cos θ_k cos θ'_k / (r_k² p_A(x_k)),
@@ -101,24 +108,6 @@ impl<'a> DirectLight<'a> {
     /// Light sampling wins for small lights and broad lobes, lobe sampling for large lights and
     /// sharp lobes; the heuristic keeps each where it is better.
     pub fn estimate(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        highlight: Option<(Vec3, f32)>,
-        sampler: &mut Sampler,
-        counts: &mut RayCounts,
-    ) -> DirectEstimate {
-        self.estimate_with(self.samples, p, n, highlight, sampler, counts)
-    }
-
-    /// The direct irradiance E at `p` with normal `n` (as `estimate`, without a highlight) from
-    /// `samples` shadow rays instead of `light_samples`: for points a final gather re-estimates
-    /// (`trace::gather::near`).
-    pub fn irradiance(&self, p: Vec3, n: Vec3, samples: u32, sampler: &mut Sampler, counts: &mut RayCounts) -> Vec3 {
-        self.estimate_with(samples, p, n, None, sampler, counts).irradiance
-    }
-
-    fn estimate_with(
         &self,
         samples: u32,
         p: Vec3,

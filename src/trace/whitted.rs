@@ -385,7 +385,7 @@ impl<'a> Tracer<'a> {
                 let needs_light =
                     (self.diffuse.needs_direct_light() && reflectance.max_element() > 0.0) || highlight.is_some();
                 let light = if needs_light {
-                    self.direct.estimate(p, facing, highlight, sampler, counts)
+                    self.direct.estimate(self.direct.light_samples(), p, facing, highlight, sampler, counts)
                 } else {
                     DirectEstimate::default()
                 };

@@ -4,9 +4,10 @@
 //! from one root self-link instead of O(s²) surface pairs.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::nodes::{Nodes, NONE};
-use super::texels::SurfaceTexels;
+use super::texels::{ElementMaterial, SurfaceTexels};
 use super::HierarchyError;
 use crate::scene::SceneDescription;
 
@@ -46,9 +47,9 @@ pub fn build_textured(scene: &SceneDescription, texels: &SurfaceTexels) -> Resul
     let mut nodes = Nodes::default();
     let mut inputs = InputTriangles::default();
     let mut tracing = TracingTriangles::default();
-    let mut corners_of: Vec<[Vec3; 3]> = Vec::new();
-    let mut meta: Vec<(u32, bool, u32)> = Vec::new();
-    let mut solved: Vec<(Vec3, Vec3)> = Vec::new();
+    // The non-degenerate triangles of every surface (quads fanned), with their surface: their texture
+    // means are computed in parallel below, in this order.
+    let mut fans: Vec<(u32, [Vec3; 3])> = Vec::new();
     for (s, surface) in scene.surfaces.iter().enumerate() {
         if scene.materials.get(surface.material as usize).is_none() {
             return Err(HierarchyError::UnknownMaterial {
@@ -74,21 +75,34 @@ pub fn build_textured(scene: &SceneDescription, texels: &SurfaceTexels) -> Resul
             if !(area > 0.0) || !area.is_finite() {
                 continue; // degenerate: carries no energy, and the parser already warned
             }
-            let front = texels.element_materials(s as u32, tri);
-            if !front.is_cut_out() {
-                let base = tracing.positions.len() as u32;
-                tracing.positions.extend_from_slice(&tri);
-                tracing.triangles.push([base, base + 1, base + 2]);
-            }
-            corners_of.push(tri);
-            meta.push((s as u32, false, surface.material));
-            solved.push(front.solved());
-            if surface.two_sided {
-                let back = [tri[0], tri[2], tri[1]];
-                corners_of.push(back);
-                meta.push((s as u32, true, surface.material));
-                solved.push(texels.element_materials(s as u32, back).solved());
-            }
+            fans.push((s as u32, tri));
+        }
+    }
+    let materials: Vec<(ElementMaterial, Option<ElementMaterial>)> = fans
+        .par_iter()
+        .map(|&(s, tri)| {
+            let back =
+                scene.surfaces[s as usize].two_sided.then(|| texels.element_materials(s, [tri[0], tri[2], tri[1]]));
+            (texels.element_materials(s, tri), back)
+        })
+        .collect();
+    let mut corners_of: Vec<[Vec3; 3]> = Vec::new();
+    let mut meta: Vec<(u32, bool, u32)> = Vec::new();
+    let mut solved: Vec<(Vec3, Vec3)> = Vec::new();
+    for (&(s, tri), (front, back)) in fans.iter().zip(materials) {
+        let material = scene.surfaces[s as usize].material;
+        if !front.is_cut_out() {
+            let base = tracing.positions.len() as u32;
+            tracing.positions.extend_from_slice(&tri);
+            tracing.triangles.push([base, base + 1, base + 2]);
+        }
+        corners_of.push(tri);
+        meta.push((s, false, material));
+        solved.push(front.solved());
+        if let Some(back) = back {
+            corners_of.push([tri[0], tri[2], tri[1]]);
+            meta.push((s, true, material));
+            solved.push(back.solved());
         }
     }
     if corners_of.is_empty() {

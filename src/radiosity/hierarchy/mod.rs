@@ -18,10 +18,12 @@
 //! The hemicube is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
 
 pub mod clusters;
+pub mod estimates;
 pub mod form_factor;
 pub mod gather;
 pub mod interpolate;
 pub mod links;
+pub mod links_file;
 pub mod nodes;
 pub mod procedural;
 pub mod refine;
@@ -36,10 +38,11 @@ use glam::{DVec3, Vec3};
 use crate::accel::Accel;
 use crate::material::SceneTextures;
 use crate::scene::SceneDescription;
+use estimates::{EstimateHooks, EstimateLog, Stopped};
 use interpolate::LeafMesh;
 use links::{refinement_error, LinkRecord, Links, LINK_BYTES};
 use nodes::{Nodes, NODE_BYTES};
-use refine::{refine, RefineSettings};
+use refine::{refine_logged, RefineSettings};
 use texels::{InputTexels, SurfaceTexels};
 use visibility::VisibilityContext;
 
@@ -59,6 +62,14 @@ pub enum HierarchyError {
          over the memory budget of {budget_bytes} bytes; raise `memory` or simplify the scene"
     )]
     OverBudget { triangles: usize, needed_bytes: usize, budget_bytes: usize },
+    #[error("stopped on request; the link estimates so far are in the solve's log")]
+    Stopped,
+}
+
+impl From<Stopped> for HierarchyError {
+    fn from(_: Stopped) -> Self {
+        HierarchyError::Stopped
+    }
 }
 
 /// Settings of the hierarchical solver.
@@ -297,6 +308,24 @@ pub fn solve_reusing(
     reuse: Option<&LinkStructure>,
     on_progress: &mut dyn FnMut(HierarchyProgress),
 ) -> Result<(HierarchicalSolution, LinkStructure), HierarchyError> {
+    let mut log = EstimateLog::default();
+    let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {} };
+    solve_logged(scene, textures, params, reuse, &mut hooks, on_progress)
+}
+
+/// `solve_reusing` with every link estimate going through `hooks.log` (`estimates`): a log from an
+/// interrupted solve of the same scene and parameters is replayed (its estimates are not computed
+/// again) and the solve ends with the bytes of an uninterrupted one. `hooks.stop` is polled between
+/// chunks of estimates and between sweeps; when it asks, this returns `HierarchyError::Stopped` with
+/// the log holding every estimate made so far (the caller's checkpoint).
+pub fn solve_logged(
+    scene: &SceneDescription,
+    textures: Arc<SceneTextures>,
+    params: &HierarchyParams,
+    reuse: Option<&LinkStructure>,
+    hooks: &mut EstimateHooks,
+    on_progress: &mut dyn FnMut(HierarchyProgress),
+) -> Result<(HierarchicalSolution, LinkStructure), HierarchyError> {
     params.validate()?;
     let triangles = count_input_triangles(scene);
     // Before anything large: the input triangles, their clusters and the links of the self-link
@@ -349,18 +378,26 @@ pub fn solve_reusing(
                 } else {
                     (links.to_records(), Vec::new())
                 };
-                let outcome = refine(&mut nodes, &ctx, records, self_links, &settings, &mut |round, kept, count| {
-                    on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })
-                });
+                let outcome = refine_logged(
+                    &mut nodes,
+                    &ctx,
+                    records,
+                    self_links,
+                    &settings,
+                    hooks,
+                    &mut |round, kept, count| {
+                        on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })
+                    },
+                )?;
                 stats.add_refinement(pass, &outcome, outcome.error_after_w);
                 links = outcome.links;
-                sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, on_progress);
+                sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, hooks.stop, on_progress)?;
             }
         }
         Some(kept) => {
             stats.refinement_passes = 1;
             stats.error_after_pass_w.push(refine::total_error(&nodes, &links.to_records()));
-            sweep_pass(&mut nodes, &links, root, params, 1, &mut stats, on_progress);
+            sweep_pass(&mut nodes, &links, root, params, 1, &mut stats, hooks.stop, on_progress)?;
             for pass in 2..=params.refinement_passes {
                 let ratio = |n: &Nodes, l: &LinkRecord, threshold: f64| {
                     refinement_error(n, l) / (threshold * n.area[l.receiver as usize].max(settings.floor_area) as f64)
@@ -373,15 +410,23 @@ pub fn solve_reusing(
                 if active.is_empty() {
                     break;
                 }
-                let outcome = refine(&mut nodes, &ctx, active, Vec::new(), &settings, &mut |round, kept, count| {
-                    on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })
-                });
+                let outcome = refine_logged(
+                    &mut nodes,
+                    &ctx,
+                    active,
+                    Vec::new(),
+                    &settings,
+                    hooks,
+                    &mut |round, kept, count| {
+                        on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })
+                    },
+                )?;
                 let mut records = outcome.links.to_records();
                 records.extend(frozen);
                 let error_after_w = refine::total_error(&nodes, &records);
                 links = Links::from_records(nodes.len(), records);
                 stats.add_refinement(pass, &outcome, error_after_w);
-                sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, on_progress);
+                sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, hooks.stop, on_progress)?;
             }
         }
     }
@@ -406,7 +451,8 @@ impl HierarchyStats {
 }
 
 /// The Gauss-Seidel sweeps of pass `pass` over `links` (warm-started from the nodes' exitance),
-/// recorded in `stats`.
+/// recorded in `stats`; `Stopped` when `stop` asks between two sweeps.
+#[allow(clippy::too_many_arguments)]
 fn sweep_pass(
     nodes: &mut Nodes,
     links: &Links,
@@ -414,19 +460,19 @@ fn sweep_pass(
     params: &HierarchyParams,
     pass: u32,
     stats: &mut HierarchyStats,
+    stop: &dyn Fn() -> bool,
     on_progress: &mut dyn FnMut(HierarchyProgress),
-) {
+) -> Result<(), Stopped> {
+    let mut on_sweep = |sweep, c: solve::SweepChange| {
+        on_progress(HierarchyProgress::Sweeping { pass, sweep, max_change: c.max_change, max_exitance: c.max_exitance })
+    };
+    let (p, sweeps) = (params, params.max_sweeps);
     let (sweeps, converged) =
-        solve::solve(nodes, links, root, params.relaxation, params.tolerance, params.max_sweeps, &mut |sweep, c| {
-            on_progress(HierarchyProgress::Sweeping {
-                pass,
-                sweep,
-                max_change: c.max_change,
-                max_exitance: c.max_exitance,
-            })
-        });
+        solve::solve_until(nodes, links, root, p.relaxation, p.tolerance, sweeps, &mut on_sweep, stop)
+            .ok_or(Stopped)?;
     stats.sweeps += sweeps;
     stats.converged = converged;
+    Ok(())
 }
 
 /// Gives every node of a kept hierarchy the materials of `texels`: each element (input triangle or
@@ -434,17 +480,11 @@ fn sweep_pass(
 /// of its children (`Nodes::set_cluster_children`). Children always have higher indices than their
 /// parent, so one pass in reverse index order sees every child before its cluster.
 fn assign_materials(nodes: &mut Nodes, texels: &InputTexels) {
+    nodes.assign_element_materials(texels, 0);
     for n in (0..nodes.len()).rev() {
-        if nodes.is_cluster[n] {
-            let (first, count) = (nodes.first_child[n], nodes.child_count[n]);
-            if first != nodes::NONE {
-                nodes.set_cluster_children(n, first, count);
-            }
-        } else {
-            let (reflectance, emission) = texels.solved_materials(nodes.input[n], nodes.corners[n]);
-            nodes.reflectance[n] = reflectance;
-            nodes.emission[n] = emission;
-            nodes.reflectance_max[n] = reflectance.max_element();
+        let (first, count) = (nodes.first_child[n], nodes.child_count[n]);
+        if nodes.is_cluster[n] && first != nodes::NONE {
+            nodes.set_cluster_children(n, first, count);
         }
     }
     nodes.texels = (!texels.surfaces.is_untextured()).then(|| Arc::new(texels.clone()));

@@ -2,6 +2,7 @@
 //! triangles, and the elements that 1→4 midpoint subdivision makes below them on demand.
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 use std::sync::Arc;
 
@@ -208,9 +209,10 @@ impl Nodes {
 
     /// Splits leaf element `node` 1→4 at its edge midpoints and returns the first child. Children
     /// inherit the parent's exitance (so its pulled value is unchanged) and its reflectance and
-    /// emission, or with `texels` their own texture means, whose area-weighted mean is the parent's. The midpoint of
-    /// edge (a, b) is computed as (a + b)·0.5, which is symmetric in a and b, so neighbours compute
-    /// bit-identical vertices.
+    /// emission; with `texels`, the caller then gives the new pieces their own texture means with
+    /// `assign_texture_means` (in parallel, once per refinement round). The midpoint of edge (a, b) is
+    /// computed as (a + b)·0.5, which is symmetric in a and b, so neighbours compute bit-identical
+    /// vertices.
     pub fn subdivide(&mut self, node: usize) -> u32 {
         assert!(!self.is_cluster[node] && self.is_leaf(node), "only leaf elements subdivide");
         let [a, b, c] = self.corners[node];
@@ -221,10 +223,6 @@ impl Nodes {
         let exitance = self.exitance[node];
         let first = self.len() as u32;
         for tri in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
-            let (rho, e) = match &self.texels {
-                Some(t) => t.solved_materials(input, tri),
-                None => (rho, e),
-            };
             let child = self.push_element(tri, input, level, rho, e) as usize;
             // Exact quarter areas and the parent's normal keep push-pull exactly conservative.
             self.area[child] = parent_area * 0.25;
@@ -237,6 +235,35 @@ impl Nodes {
         self.first_child[node] = first;
         self.child_count[node] = 4;
         first
+    }
+
+    /// With `texels`, gives every element from `first` on (the pieces `subdivide` made since the caller
+    /// noted `len()`) its own texture means (`assign_element_materials`). Without `texels`, nothing
+    /// changes.
+    pub fn assign_texture_means(&mut self, first: usize) {
+        if let Some(texels) = self.texels.clone() {
+            self.assign_element_materials(&texels, first);
+        }
+    }
+
+    /// Gives every element from `first` on its materials from `texels` (`InputTexels::solved_materials`:
+    /// reflectance, emission and the error estimate's ρ); clusters are left as they are. Each is a pure
+    /// function of the element's input triangle and corners, so they are computed in parallel and
+    /// stored in index order: the same bytes for any thread count. Pieces' texture means
+    /// area-average to their parent's up to the pyramid level each is taken at
+    /// (`Texture::mean_over_triangle`).
+    pub fn assign_element_materials(&mut self, texels: &InputTexels, first: usize) {
+        let materials: Vec<Option<(Vec3, Vec3)>> = (first..self.len())
+            .into_par_iter()
+            .map(|n| (!self.is_cluster[n]).then(|| texels.solved_materials(self.input[n], self.corners[n])))
+            .collect();
+        for (n, m) in (first..).zip(materials) {
+            if let Some((reflectance, emission)) = m {
+                self.reflectance[n] = reflectance;
+                self.emission[n] = emission;
+                self.reflectance_max[n] = reflectance.max_element();
+            }
+        }
     }
 }
 

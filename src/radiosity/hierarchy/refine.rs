@@ -4,8 +4,7 @@
 //! minimum element area, or the memory budget is spent (then the coarser link is kept and the budget
 //! flag raised, never an allocation beyond it).
 
-use rayon::prelude::*;
-
+use super::estimates::{estimate_links, EstimateHooks, EstimateKind, EstimateLog, Stopped};
 use super::links::{
     estimate, link_error_power, near_form_factor, near_push_spread, refinement_error, source_variation_power,
     LinkRecord, Links, LINK_BYTES,
@@ -86,14 +85,19 @@ enum Split {
 /// Breadth-first: each round estimates its new links in parallel (pure reads of `nodes`, in a fixed
 /// order) and then decides, serially and in order, which to split, so the result is the same for any
 /// thread count.
-pub fn refine(
+///
+/// Every estimate goes through `hooks.log` (`estimates`): taken from it while it lasts (a resumed
+/// solve), else computed and appended, so the same log replays to the same links. Stops with the log
+/// up to date when `hooks.stop` asks (polled between chunks of estimates).
+pub fn refine_logged(
     nodes: &mut Nodes,
     ctx: &VisibilityContext,
     records: Vec<LinkRecord>,
     self_links: Vec<u32>,
     settings: &RefineSettings,
+    hooks: &mut EstimateHooks,
     on_round: &mut dyn FnMut(u32, usize, usize),
-) -> RefineOutcome {
+) -> Result<RefineOutcome, Stopped> {
     let mut work = records;
     for c in self_links {
         if nodes.is_cluster[c as usize] {
@@ -104,12 +108,14 @@ pub fn refine(
     let mut kept: Vec<LinkRecord> = Vec::with_capacity(work.len());
     loop {
         let mut next: Vec<Pending> = Vec::new();
+        // Pieces made by this round's splits get their texture means after the round (in parallel).
+        let first_piece = nodes.len();
         // The links of this round still to be decided count against the budget too.
         let work_len = work.len();
         for link in work.drain(..) {
             let (r, s) = (link.receiver as usize, link.source as usize);
             if !(refinement_error(nodes, &link) > settings.allowed_error_w(nodes.area[r])) {
-                keep(nodes, ctx, link, &mut kept);
+                keep(nodes, ctx, link, &mut kept, hooks.log);
                 continue;
             }
             if r == s {
@@ -118,7 +124,7 @@ pub fn refine(
                 let bytes = budget_bytes(nodes.len(), kept.len() + next.len() + children.len().pow(2) + work_len);
                 if bytes > settings.budget_bytes {
                     out.budget_exceeded = true;
-                    keep(nodes, ctx, link, &mut kept);
+                    keep(nodes, ctx, link, &mut kept, hooks.log);
                     continue;
                 }
                 out.peak_bytes = out.peak_bytes.max(bytes);
@@ -137,7 +143,7 @@ pub fn refine(
             let source_varies_most =
                 source_variation_power(nodes, r, s, link.form_factor) > link_error_power(nodes, r, s, link.spread);
             let Some(side) = choose_split(nodes, r, s, settings.min_element_area, source_varies_most) else {
-                keep(nodes, ctx, link, &mut kept);
+                keep(nodes, ctx, link, &mut kept, hooks.log);
                 continue;
             };
             let split = match side {
@@ -149,7 +155,7 @@ pub fn refine(
             let bytes = budget_bytes(nodes.len() + new_nodes, kept.len() + next.len() + child_links + work_len);
             if bytes > settings.budget_bytes {
                 out.budget_exceeded = true;
-                keep(nodes, ctx, link, &mut kept);
+                keep(nodes, ctx, link, &mut kept, hooks.log);
                 continue;
             }
             out.peak_bytes = out.peak_bytes.max(bytes);
@@ -170,6 +176,7 @@ pub fn refine(
                 }
             }
         }
+        nodes.assign_texture_means(first_piece);
         if next.is_empty() {
             break;
         }
@@ -178,12 +185,13 @@ pub fn refine(
         out.estimated += next.len() as u64;
         let estimates: Vec<Option<(f32, f32)>> = {
             let nodes: &Nodes = nodes;
-            next.par_iter()
-                .map(|p| {
-                    let (r, s) = (p.receiver as usize, p.source as usize);
-                    estimate(nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
-                })
-                .collect()
+            let pairs: Vec<(u32, u32)> = next.iter().map(|p| (p.receiver, p.source)).collect();
+            let compute = |i: usize| {
+                let p = &next[i];
+                let (r, s) = (p.receiver as usize, p.source as usize);
+                estimate(nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
+            };
+            estimate_links(&pairs, &compute, hooks)?
         };
         work = next
             .iter()
@@ -196,18 +204,43 @@ pub fn refine(
     out.error_after_w = total_error(nodes, &kept);
     out.peak_bytes = out.peak_bytes.max(budget_bytes(nodes.len(), kept.len()));
     out.links = Links::from_records(nodes.len(), kept);
-    out
+    Ok(out)
+}
+
+/// `refine_logged` that keeps no log and is never stopped.
+pub fn refine(
+    nodes: &mut Nodes,
+    ctx: &VisibilityContext,
+    records: Vec<LinkRecord>,
+    self_links: Vec<u32>,
+    settings: &RefineSettings,
+    on_round: &mut dyn FnMut(u32, usize, usize),
+) -> RefineOutcome {
+    let mut log = EstimateLog::default();
+    let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {} };
+    match refine_logged(nodes, ctx, records, self_links, settings, &mut hooks, on_round) {
+        Ok(outcome) => outcome,
+        Err(Stopped) => unreachable!("never stopped"),
+    }
 }
 
 /// Keeps `link`; a near link that was not estimated (it was expected to split, but cannot or may not)
 /// gets its form factor now, and is dropped if its ends cannot exchange light.
-fn keep(nodes: &Nodes, ctx: &VisibilityContext, mut link: LinkRecord, kept: &mut Vec<LinkRecord>) {
+/// The form factor goes through `log` like every estimate.
+fn keep(
+    nodes: &Nodes,
+    ctx: &VisibilityContext,
+    mut link: LinkRecord,
+    kept: &mut Vec<LinkRecord>,
+    log: &mut EstimateLog,
+) {
     if link.form_factor.is_nan() {
         let (r, s) = (link.receiver as usize, link.source as usize);
-        match near_form_factor(nodes, ctx, r, s) {
-            Some(f) => {
+        let near = || near_form_factor(nodes, ctx, r, s).map(|f| (f, near_push_spread(nodes, ctx, r, s, f)));
+        match log.one(EstimateKind::KeptNear, link.receiver, link.source, near) {
+            Some((f, push)) => {
                 link.form_factor = f;
-                link.spread += near_push_spread(nodes, ctx, r, s, f);
+                link.spread += push;
             }
             None => return,
         }

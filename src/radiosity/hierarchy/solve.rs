@@ -75,14 +75,33 @@ pub fn solve(
     max_sweeps: u32,
     on_sweep: &mut dyn FnMut(u32, SweepChange),
 ) -> (u32, bool) {
+    solve_until(nodes, links, root, relaxation, tolerance, max_sweeps, on_sweep, &|| false).expect("never stopped")
+}
+
+/// `solve` that looks at `stop` before each sweep: `None` when it asked (the exitance is then that
+/// of the last finished sweep).
+#[allow(clippy::too_many_arguments)]
+pub fn solve_until(
+    nodes: &mut Nodes,
+    links: &Links,
+    root: usize,
+    relaxation: f64,
+    tolerance: f64,
+    max_sweeps: u32,
+    on_sweep: &mut dyn FnMut(u32, SweepChange),
+    stop: &dyn Fn() -> bool,
+) -> Option<(u32, bool)> {
     for k in 1..=max_sweeps {
+        if stop() {
+            return None;
+        }
         let c = sweep(nodes, links, root, relaxation);
         on_sweep(k, c);
         if c.max_change <= tolerance * c.max_exitance {
-            return (k, true);
+            return Some((k, true));
         }
     }
-    (max_sweeps, false)
+    Some((max_sweeps, false))
 }
 
 /// Sets every leaf to its emission and pulls the means up: the exitance that the first refinement

@@ -3,10 +3,13 @@
 //! temporary file and renamed (atomic); read whole and checked (magic, version, checksum, bounds)
 //! before anything is trusted.
 //!
-//! Layout, little-endian: `RADRAYRW`, version u32, kind u8 (0 checkpoint, 1 shard part), mesh
-//! fingerprint u64, form-factor key u64, shard index u32, shard count u32, elements n u64, a bitset of
-//! the done rows (⌈n/8⌉ bytes), then per done row: plain length u32, length u32, columns u32 × length,
-//! values f32 × length; specular pixels, rays, entries u64; and FNV-1a 64 of everything before it.
+//! Layout, little-endian: `RADRAYRW`, version u32, kind u8 (0 checkpoint, 1 shard part, 2 hierarchy
+//! checkpoint), mesh fingerprint u64, form-factor key u64, shard index u32, shard count u32, then the
+//! payload, and FNV-1a 64 of everything before it. The container (header, checksum, atomic write,
+//! bounds-checked reading: `write_container`, `parse_container`) is shared with the hierarchy's
+//! link-estimate log (`hierarchy::links_file`); the rows payload is: elements n u64, a bitset of the
+//! done rows (⌈n/8⌉ bytes), then per done row: plain length u32, length u32, columns u32 × length,
+//! values f32 × length; specular pixels, rays, entries u64.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -27,6 +30,27 @@ pub enum RowsKind {
     Checkpoint,
     /// One shard's finished rows (`solve --shard K/N`).
     ShardPart,
+    /// A hierarchical solve's checkpoint: its log of link estimates (`hierarchy::links_file`).
+    HierarchyCheckpoint,
+}
+
+impl RowsKind {
+    fn byte(self) -> u8 {
+        match self {
+            RowsKind::Checkpoint => 0,
+            RowsKind::ShardPart => 1,
+            RowsKind::HierarchyCheckpoint => 2,
+        }
+    }
+
+    /// What a file of this kind holds, for messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            RowsKind::Checkpoint => "a form-factor checkpoint",
+            RowsKind::ShardPart => "a form-factor shard part",
+            RowsKind::HierarchyCheckpoint => "a hierarchical solve's checkpoint (link estimates)",
+        }
+    }
 }
 
 /// Which scene and which part of its rows a file holds.
@@ -55,6 +79,8 @@ pub enum RowsFileError {
     Checksum { path: PathBuf },
     #[error("{}: damaged at byte {offset}: {what}", path.display())]
     Damaged { path: PathBuf, offset: usize, what: String },
+    #[error("{}: {} where {expected} was expected", path.display(), found.describe())]
+    WrongKind { path: PathBuf, found: RowsKind, expected: &'static str },
 }
 
 /// Writes `rows` of a matrix of `elements` rows under `header` to `path` (rows past `rows.len()` are
@@ -75,22 +101,10 @@ pub fn write_rows(
     elements: usize,
 ) -> Result<(), RowsFileError> {
     assert!(done.len() <= elements && ff.len() == done.len(), "a prefix of the matrix's rows");
-    let tmp = crate::output::temporary_path(path);
-    let io = |source| RowsFileError::Io { path: path.to_path_buf(), source };
-    let result = (|| {
-        let file = std::fs::File::create(&tmp)?;
-        let mut out =
-            HashingWriter { inner: std::io::BufWriter::with_capacity(1 << 20, file), hash: Fnv1a64::default() };
-        out.write_all(MAGIC)?;
-        out.write_all(&VERSION.to_le_bytes())?;
-        out.write_all(&[match header.kind {
-            RowsKind::Checkpoint => 0,
-            RowsKind::ShardPart => 1,
-        }])?;
-        out.write_all(&header.fingerprint.to_le_bytes())?;
-        out.write_all(&header.form_factor_key.to_le_bytes())?;
-        out.write_all(&header.shard_index.to_le_bytes())?;
-        out.write_all(&header.shard_count.to_le_bytes())?;
+    if header.kind == RowsKind::HierarchyCheckpoint {
+        return Err(RowsFileError::WrongKind { path: path.to_path_buf(), found: header.kind, expected: "rows" });
+    }
+    write_container(path, header, &mut |out| {
         out.write_all(&(elements as u64).to_le_bytes())?;
         let mut bits = vec![0u8; elements.div_ceil(8)];
         for (i, _) in done.iter().enumerate().filter(|(_, &d)| d) {
@@ -111,6 +125,32 @@ pub fn write_rows(
         for x in [specular.pixels, specular.rays, specular.entries] {
             out.write_all(&x.to_le_bytes())?;
         }
+        Ok(())
+    })
+}
+
+/// Writes a file of this family: the header, the payload `payload` writes, and the checksum;
+/// streamed to `dir/.name.tmp-PID`, synced, then renamed, so a reader sees the old file or the new
+/// one, never a half-written one.
+pub fn write_container(
+    path: &Path,
+    header: &RowsHeader,
+    payload: &mut dyn FnMut(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), RowsFileError> {
+    let tmp = crate::output::temporary_path(path);
+    let io = |source| RowsFileError::Io { path: path.to_path_buf(), source };
+    let result = (|| {
+        let file = std::fs::File::create(&tmp)?;
+        let mut out =
+            HashingWriter { inner: std::io::BufWriter::with_capacity(1 << 20, file), hash: Fnv1a64::default() };
+        out.write_all(MAGIC)?;
+        out.write_all(&VERSION.to_le_bytes())?;
+        out.write_all(&[header.kind.byte()])?;
+        out.write_all(&header.fingerprint.to_le_bytes())?;
+        out.write_all(&header.form_factor_key.to_le_bytes())?;
+        out.write_all(&header.shard_index.to_le_bytes())?;
+        out.write_all(&header.shard_count.to_le_bytes())?;
+        payload(&mut out)?;
         let checksum = out.hash.finish();
         let mut inner = out.inner;
         inner.write_all(&checksum.to_le_bytes())?;
@@ -133,37 +173,11 @@ pub fn read(path: &Path) -> Result<(RowsHeader, PartialRows), RowsFileError> {
 
 /// `read` over bytes already in memory; `path` names them in errors.
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, PartialRows), RowsFileError> {
-    let path_buf = || path.to_path_buf();
-    if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
-        return Err(RowsFileError::NotARowsFile { path: path_buf() });
+    let (header, mut r) = parse_container(path, bytes)?;
+    if header.kind == RowsKind::HierarchyCheckpoint {
+        return Err(RowsFileError::WrongKind { path: path.to_path_buf(), found: header.kind, expected: "rows" });
     }
-    let mut r = Reader { path, bytes, at: MAGIC.len() };
-    let version = r.u32()?;
-    if version != VERSION {
-        return Err(RowsFileError::UnsupportedVersion { path: path_buf(), version });
-    }
-    if bytes.len() < 8 + MAGIC.len() {
-        return Err(RowsFileError::Checksum { path: path_buf() });
-    }
-    let (body, stored) = bytes.split_at(bytes.len() - 8);
-    let mut hash = Fnv1a64::default();
-    hash.write(body);
-    if stored != hash.finish().to_le_bytes() {
-        return Err(RowsFileError::Checksum { path: path_buf() });
-    }
-    r.bytes = body;
-    let kind = match r.take(1)?[0] {
-        0 => RowsKind::Checkpoint,
-        1 => RowsKind::ShardPart,
-        k => return Err(r.damaged(format!("unknown kind {k}"))),
-    };
-    let fingerprint = r.u64()?;
-    let form_factor_key = r.u64()?;
-    let shard_index = r.u32()?;
-    let shard_count = r.u32()?;
-    if shard_count == 0 || shard_index >= shard_count {
-        return Err(r.damaged(format!("shard {shard_index} of {shard_count}")));
-    }
+    let body = r.bytes;
     let n = r.u64()?;
     // Every element takes at least one bit: a count beyond the file's size is damage, not a request
     // for memory.
@@ -204,11 +218,46 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, PartialRows), Row
         ff.row_start.push(ff.column.len());
     }
     let specular = SpecularStats { pixels: r.u64()?, rays: r.u64()?, entries: r.u64()? };
-    if r.at != body.len() {
-        return Err(r.damaged(format!("{} bytes after the last section", body.len() - r.at)));
-    }
-    let header = RowsHeader { kind, fingerprint, form_factor_key, shard_index, shard_count };
+    r.finish()?;
     Ok((header, PartialRows { ff, done, specular }))
+}
+
+/// Checks a file of this family (magic, version, checksum, header) and returns its header and a
+/// reader over its payload.
+pub fn parse_container<'a>(path: &'a Path, bytes: &'a [u8]) -> Result<(RowsHeader, Payload<'a>), RowsFileError> {
+    let path_buf = || path.to_path_buf();
+    if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
+        return Err(RowsFileError::NotARowsFile { path: path_buf() });
+    }
+    let mut r = Payload { path, bytes, at: MAGIC.len() };
+    let version = r.u32()?;
+    if version != VERSION {
+        return Err(RowsFileError::UnsupportedVersion { path: path_buf(), version });
+    }
+    if bytes.len() < 8 + MAGIC.len() {
+        return Err(RowsFileError::Checksum { path: path_buf() });
+    }
+    let (body, stored) = bytes.split_at(bytes.len() - 8);
+    let mut hash = Fnv1a64::default();
+    hash.write(body);
+    if stored != hash.finish().to_le_bytes() {
+        return Err(RowsFileError::Checksum { path: path_buf() });
+    }
+    r.bytes = body;
+    let kind = match r.take(1)?[0] {
+        0 => RowsKind::Checkpoint,
+        1 => RowsKind::ShardPart,
+        2 => RowsKind::HierarchyCheckpoint,
+        k => return Err(r.damaged(format!("unknown kind {k}"))),
+    };
+    let fingerprint = r.u64()?;
+    let form_factor_key = r.u64()?;
+    let shard_index = r.u32()?;
+    let shard_count = r.u32()?;
+    if shard_count == 0 || shard_index >= shard_count {
+        return Err(r.damaged(format!("shard {shard_index} of {shard_count}")));
+    }
+    Ok((RowsHeader { kind, fingerprint, form_factor_key, shard_index, shard_count }, r))
 }
 
 /// A writer that hashes what passes through it (for the trailing checksum).
@@ -229,19 +278,33 @@ impl<W: Write> Write for HashingWriter<W> {
     }
 }
 
-/// A bounds-checked cursor over the file's bytes.
-struct Reader<'a> {
+/// A bounds-checked cursor over a file's payload (the checksum excluded).
+pub struct Payload<'a> {
     path: &'a Path,
     bytes: &'a [u8],
     at: usize,
 }
 
-impl<'a> Reader<'a> {
-    fn damaged(&self, what: String) -> RowsFileError {
+impl<'a> Payload<'a> {
+    /// An error naming the file and the current offset.
+    pub fn damaged(&self, what: String) -> RowsFileError {
         RowsFileError::Damaged { path: self.path.to_path_buf(), offset: self.at, what }
     }
 
-    fn take(&mut self, len: usize) -> Result<&'a [u8], RowsFileError> {
+    /// Bytes not read yet.
+    pub fn remaining(&self) -> usize {
+        self.bytes.len() - self.at
+    }
+
+    /// Refuses bytes after the last section.
+    pub fn finish(&self) -> Result<(), RowsFileError> {
+        match self.remaining() {
+            0 => Ok(()),
+            extra => Err(self.damaged(format!("{extra} bytes after the last section"))),
+        }
+    }
+
+    pub fn take(&mut self, len: usize) -> Result<&'a [u8], RowsFileError> {
         let end = self.at.checked_add(len).filter(|&e| e <= self.bytes.len());
         let Some(end) = end else {
             return Err(self.damaged(format!("{len} bytes needed, {} left", self.bytes.len() - self.at)));
@@ -251,14 +314,32 @@ impl<'a> Reader<'a> {
         Ok(slice)
     }
 
-    fn u32(&mut self) -> Result<u32, RowsFileError> {
+    pub fn u8(&mut self) -> Result<u8, RowsFileError> {
+        Ok(self.take(1)?[0])
+    }
+
+    pub fn u32(&mut self) -> Result<u32, RowsFileError> {
         let b = self.take(4)?;
         Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
 
-    fn u64(&mut self) -> Result<u64, RowsFileError> {
+    pub fn u64(&mut self) -> Result<u64, RowsFileError> {
         let b = self.take(8)?;
         Ok(u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+    }
+}
+
+/// Checks that `refused` refuses every truncation of `bytes` and every copy with one byte flipped
+/// (the checksum and the bounds checks of a file of this family).
+#[cfg(test)]
+pub(crate) fn assert_every_damage_refused(bytes: &[u8], refused: impl Fn(&[u8]) -> bool) {
+    for len in 0..bytes.len() {
+        assert!(refused(&bytes[..len]), "truncated to {len} bytes");
+    }
+    for at in 0..bytes.len() {
+        let mut damaged = bytes.to_vec();
+        damaged[at] ^= 0x10;
+        assert!(refused(&damaged), "byte {at} flipped");
     }
 }
 
@@ -302,13 +383,6 @@ mod tests {
         let (header, rows) = sample();
         write(&path, &header, &rows, 3).unwrap();
         let bytes = std::fs::read(&path).unwrap();
-        for len in 0..bytes.len() {
-            assert!(parse(&path, &bytes[..len]).is_err(), "truncated to {len} bytes");
-        }
-        for at in 0..bytes.len() {
-            let mut damaged = bytes.clone();
-            damaged[at] ^= 0x10;
-            assert!(parse(&path, &damaged).is_err(), "byte {at} flipped");
-        }
+        assert_every_damage_refused(&bytes, |b| parse(&path, b).is_err());
     }
 }

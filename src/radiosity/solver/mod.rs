@@ -144,8 +144,12 @@ pub fn solve_f64(
     params: &RadiosityParams,
     on_iteration: &mut dyn FnMut(u32, f64),
 ) -> (Vec<DVec3>, SolveStats) {
-    solve_f64_until(ff, reflectance, emission, area, params, on_iteration, &|| false)
-        .expect("a solve that is never stopped finishes")
+    to_the_end(|stop| solve_f64_until(ff, reflectance, emission, area, params, on_iteration, stop))
+}
+
+/// Runs an `_until` solve that is never stopped, which therefore finishes.
+fn to_the_end<T>(solve: impl FnOnce(&dyn Fn() -> bool) -> Option<T>) -> T {
+    solve(&|| false).expect("a solve that is never stopped finishes")
 }
 
 /// `solve_f64`, abandoned (`None`) as soon as `stop` returns true; it is polled before every sweep
@@ -186,8 +190,7 @@ pub fn solve_solution(
     params: &RadiosityParams,
     on_iteration: &mut dyn FnMut(u32, f64),
 ) -> Solution {
-    solve_solution_until(mesh, materials, ff, params, on_iteration, &|| false)
-        .expect("a solve that is never stopped finishes")
+    to_the_end(|stop| solve_solution_until(mesh, materials, ff, params, on_iteration, stop))
 }
 
 /// `solve_solution`, abandoned (`None`) as soon as `stop` returns true (polled before every sweep or

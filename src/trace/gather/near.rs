@@ -62,7 +62,7 @@ impl Tracer<'_> {
             return Vec3::ZERO;
         }
         let (x, n) = (hit.position, hit.geometric_normal);
-        let direct = self.direct_light().irradiance(x, n, NEAR_LIGHT_SAMPLES, sampler, counts);
+        let direct = self.direct_light().estimate(NEAR_LIGHT_SAMPLES, x, n, None, sampler, counts).irradiance;
         let (t, b) = frame(n);
         let origin = x + n * self.ray_offset();
         let strata = near.strata;
