@@ -14,6 +14,7 @@ the process's peak resident set (ru_maxrss), all from os.wait4.
     python3 docs/make_report.py --quick    # a smoke run in about a minute (fewer, cheaper settings)
     python3 docs/make_report.py --benches  # also run the criterion benches briefly (adds ~10 minutes)
     python3 docs/make_report.py --readme   # also write the measured preset figures into README.md
+    python3 docs/make_report.py --presets-only --readme   # only the presets' figures, into README.md
 
 Timings depend on what else the machine is doing: the load average before and after is recorded in
 both documents. Run it on a quiet machine before committing its outputs.
@@ -753,6 +754,21 @@ def main() -> None:
         subprocess.run(["cargo", "build", "--release", "--bin", "radray"], cwd=ROOT, check=True)
     IMAGES.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix="radray-report-"))
+    if ARGS.presets_only:
+        try:
+            results = []
+            for s in [Setting(q, quality=q) for q in ("preview", "default", "high")]:
+                for mode in ("final", "radiosity"):
+                    results.append(render_and_measure(s, mode, tmp, REFERENCES / "cornell_original" / "reference.exr"))
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        cells = preset_cells(results)
+        print(f"load average before {load_before}, after {load_average()}")
+        print(table(["preset", "measured"], [[f"`{k}`", v] for k, v in cells.items()]))
+        if ARGS.readme:
+            update_readme(cells)
+        log(f"measured the presets in {time.time() - started:.0f} s")
+        return
     try:
         ttE, tte_text = time_to_error(tmp)
         view_text = second_view(tmp)
@@ -837,5 +853,11 @@ if __name__ == "__main__":
     parser.add_argument("--benches", action="store_true", help="also run the criterion benches briefly")
     parser.add_argument("--readme", action="store_true", help="write the preset figures into README.md")
     parser.add_argument("--no-build", action="store_true", help="use target/release/radray as it is")
+    parser.add_argument(
+        "--presets-only",
+        action="store_true",
+        help="measure only the three presets on cornell_original and print their cells (README.md with --readme); "
+        "docs/accuracy.md and docs/performance.md are left as they are",
+    )
     ARGS = parser.parse_args()
     main()
