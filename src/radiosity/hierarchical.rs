@@ -17,12 +17,13 @@ use rayon::prelude::*;
 
 use super::fingerprint::Fnv1a64;
 use super::hierarchy::estimates::{EstimateHooks, EstimateLog};
+use super::hierarchy::shards::SharedEstimates;
 use super::hierarchy::{
     self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyError, HierarchyParams, HierarchyProgress,
 };
 use super::leaf_mesh::{self, LeafGeometry, LeafMeshBuild};
 use super::method::{MethodError, PassOne, PassOneMethod, Reuse};
-use super::resume::{self, Checkpointer, SceneKeys};
+use super::resume::{self, Checkpointer, Resume, SceneKeys, Shard};
 use super::solution::Solution;
 use super::stats::{PassOneStats, ResumeStats, SolveStats};
 use crate::accel::Accel;
@@ -294,6 +295,11 @@ impl PassOneMethod for Hierarchical {
             None => EstimateLog::default(),
         };
         let logged = log.entries.len();
+        // A merge (`--merge`): the whole solve, with the shards' estimates (`hierarchy::shards`).
+        let shared = match resume.merge.is_empty() {
+            true => None,
+            false => Some(SharedEstimates::for_merge(resume::merge_hierarchy_parts(&resume.merge, keys)?)),
+        };
         let load_seconds = load_start.elapsed().as_secs_f64();
         let mut checkpointer =
             resume.checkpoint.as_ref().map(|path| Checkpointer::for_hierarchy(path.clone(), keys, resume.interval));
@@ -307,7 +313,8 @@ impl PassOneMethod for Hierarchical {
                 }
             }
         };
-        let mut hooks = EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk };
+        let mut hooks =
+            EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: shared.as_ref() };
         let solved = hierarchy::solve_logged(
             scene,
             mesh.textures.clone(),
@@ -419,6 +426,22 @@ impl PassOneMethod for Hierarchical {
                 checkpoint_seconds: checkpointer.write_seconds,
             });
         }
+        if let Some(shared) = &shared {
+            let hits = shared.hits() as usize;
+            progress.note(&format!(
+                "merge: {hits} of {} link estimates from the {} parts ({} held), {} computed here",
+                log.computed,
+                resume.merge.len(),
+                shared.known_len(),
+                log.computed - hits
+            ));
+            resume_stats = Some(ResumeStats {
+                rows_resumed: hits,
+                rows_computed: log.computed - hits,
+                load_seconds,
+                ..Default::default()
+            });
+        }
         let stats = PassOneStats {
             elements: leaf_mesh.elements.len(),
             solver: Some(self.name()),
@@ -429,5 +452,68 @@ impl PassOneMethod for Hierarchical {
             ..Default::default()
         };
         Ok(PassOne { mesh: leaf_mesh, solution, stats, reused_form_factors: reused })
+    }
+}
+
+impl Hierarchical {
+    /// Shard `shard` of a hierarchical pass one (`solve --shard K/N`): refines the first pass for the
+    /// shard's receiver groups (`hierarchy::shards`) and writes its pure link estimates to `output` as
+    /// a part for `--merge`. A shard keeps no checkpoint (an interrupted shard starts again).
+    pub fn shard_part(
+        &self,
+        scene: &SceneDescription,
+        textures: Arc<SceneTextures>,
+        shard: Shard,
+        resume: &Resume,
+        output: &std::path::Path,
+        progress: &Progress,
+    ) -> Result<PassOneStats, MethodError> {
+        self.check_memory(scene, &Mesh::default())?;
+        let params = hierarchy_params(scene);
+        let keys = SceneKeys {
+            fingerprint: scene_fingerprint(scene, &params, &textures),
+            form_factor_key: link_key(scene, &params, &textures),
+        };
+        let stage = progress.stage("hierarchy shard", 1, "passes");
+        let start = Instant::now();
+        let shared = SharedEstimates::for_shard(shard.index, shard.count);
+        let mut log = EstimateLog::default();
+        let cancel = &resume.cancel;
+        let stop = || cancel.is_requested();
+        let mut after_chunk = |_: &EstimateLog, computed: usize| (0..computed).for_each(|_| cancel.row_done());
+        let mut hooks =
+            EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: Some(&shared) };
+        let solved = hierarchy::solve_logged(scene, textures, &params, None, &mut hooks, &mut |p| {
+            if let HierarchyProgress::Refining { round, links, nodes, .. } = p {
+                stage.set_message(format!(
+                    "shard {}/{} round {round}: {nodes} nodes, {links} links",
+                    shard.index, shard.count
+                ));
+            }
+        });
+        let (solved, _) = match solved {
+            Err(HierarchyError::Stopped) => {
+                let signal = cancel.signal().unwrap_or(crate::interrupt::SIGINT);
+                return Err(MethodError::Interrupted { signal, checkpoint: None });
+            }
+            other => {
+                other.map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?
+            }
+        };
+        let entries = shared.take_recorded();
+        resume::write_hierarchy_part(output, keys, shard, &entries).map_err(resume::ShardError::from)?;
+        stage.finish(&format!(
+            "shard {}/{}: {} links estimated, {} of them shared with the merge",
+            shard.index,
+            shard.count,
+            log.computed,
+            entries.len()
+        ));
+        Ok(PassOneStats {
+            solver: Some(self.name()),
+            solve_seconds: start.elapsed().as_secs_f64(),
+            hierarchy: Some(solved.stats),
+            ..Default::default()
+        })
     }
 }

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::hierarchy::estimates::{EstimateLog, LoggedEstimate};
-use super::hierarchy::links_file;
+use super::hierarchy::shards::SharedEstimate;
+use super::hierarchy::{links_file, part_file};
 use super::matrix::rows_file::{self, RowsFileError, RowsHeader, RowsKind};
 use super::matrix::{FormFactors, PartialRows};
 use crate::interrupt::Cancel;
@@ -253,17 +254,22 @@ pub enum ShardError {
     NoParts,
     #[error("{}: incomplete: {missing} of its rows are missing", path.display())]
     Incomplete { path: PathBuf, missing: usize },
-    #[error("{scene}: sharding and merging need the stored matrix ([radiosity] method = \"matrix\", store_form_factors = true); this scene uses {method}")]
+    #[error("{scene}: sharding and merging need the stored matrix ([radiosity] method = \"matrix\", store_form_factors = true) or the hierarchy; this scene uses {method}")]
     NotMatrix { scene: String, method: String },
 }
 
-/// Joins the parts of a sharded pass one: every part must be a finished shard part of this scene,
-/// all of the same count N, each K in 0..N exactly once, and together they must hold every row.
-pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, ShardError> {
-    let mut parts: Vec<(PathBuf, RowsHeader, PartialRows)> = Vec::with_capacity(paths.len());
+/// Reads the parts at `paths` with `read` and checks them: every one a `kind` part of this scene,
+/// all of the same count N, each K in 0..N exactly once.
+fn checked_parts<T>(
+    paths: &[PathBuf],
+    keys: SceneKeys,
+    kind: RowsKind,
+    read: impl Fn(&Path) -> Result<(RowsHeader, T), RowsFileError>,
+) -> Result<Vec<(PathBuf, RowsHeader, T)>, ShardError> {
+    let mut parts: Vec<(PathBuf, RowsHeader, T)> = Vec::with_capacity(paths.len());
     for path in paths {
-        let (header, rows) = rows_file::read(path)?;
-        if header.kind != RowsKind::ShardPart {
+        let (header, payload) = read(path)?;
+        if header.kind != kind {
             return Err(ShardError::NotAPart { path: path.clone() });
         }
         if header.fingerprint != keys.fingerprint || header.form_factor_key != keys.form_factor_key {
@@ -291,13 +297,20 @@ pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, Sh
                 second: path.clone(),
             });
         }
-        parts.push((path.clone(), header, rows));
+        parts.push((path.clone(), header, payload));
     }
     let count = parts.first().ok_or(ShardError::NoParts)?.1.shard_count;
     let missing: Vec<u32> = (0..count).filter(|k| !parts.iter().any(|(_, h, _)| h.shard_index == *k)).collect();
     if !missing.is_empty() {
         return Err(ShardError::Missing { missing, count });
     }
+    Ok(parts)
+}
+
+/// Joins the parts of a sharded pass one: every part must be a finished shard part of this scene,
+/// all of the same count N, each K in 0..N exactly once, and together they must hold every row.
+pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, ShardError> {
+    let parts = checked_parts(paths, keys, RowsKind::ShardPart, rows_file::read)?;
     for (path, header, rows) in &parts {
         let shard = Shard { index: header.shard_index, count: header.shard_count };
         let missing = (0..rows.len()).filter(|&i| shard.selects(i) && !rows.done[i]).count();
@@ -307,6 +320,31 @@ pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, Sh
     }
     let rows: Vec<PartialRows> = parts.into_iter().map(|(_, _, rows)| rows).collect();
     PartialRows::union(&rows).ok_or(ShardError::ElementCounts)
+}
+
+/// The link estimates of a sharded hierarchical pass one, checked like `merge_parts`'s rows (every
+/// part of this scene and settings, each shard once), all parts' entries in one list.
+pub fn merge_hierarchy_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<Vec<SharedEstimate>, ShardError> {
+    let parts = checked_parts(paths, keys, RowsKind::HierarchyShardPart, part_file::read)?;
+    Ok(parts.into_iter().flat_map(|(_, _, entries)| entries).collect())
+}
+
+/// Writes shard `shard`'s pure link estimates of a hierarchical pass one as a part for
+/// `merge_hierarchy_parts`.
+pub fn write_hierarchy_part(
+    path: &Path,
+    keys: SceneKeys,
+    shard: Shard,
+    entries: &[SharedEstimate],
+) -> Result<(), RowsFileError> {
+    let header = RowsHeader {
+        kind: RowsKind::HierarchyShardPart,
+        fingerprint: keys.fingerprint,
+        form_factor_key: keys.form_factor_key,
+        shard_index: shard.index,
+        shard_count: shard.count,
+    };
+    part_file::write(path, &header, entries)
 }
 
 /// Writes shard `shard`'s finished rows as a part for `merge_parts`.

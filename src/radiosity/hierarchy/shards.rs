@@ -1,0 +1,194 @@
+//! Pass one of the hierarchy split over machines (`solve --shard K/N`, `--merge`): which receivers a
+//! shard refines, and the link estimates shards hand to the merge, keyed by the tree paths of the
+//! link's ends (`tree_path`) so that they do not depend on the order in which nodes were subdivided.
+//!
+//! Refinement is a forest below the root's self-link: a link's children keep its receiver or take a
+//! child of it, so a shard that drops the new links of receivers it does not own refines its own
+//! receivers' links exactly as far as the whole solve, as long as the decisions do not look beyond the
+//! link. They do not in pass one (every exitance is the emission), except near links, whose form
+//! factor integrates over the leaves found below their ends when they are estimated, and the memory
+//! budget. So a shard records only *pure* estimates: links that are not near (element ← element, far
+//! links with a cluster end), a function of the two paths, the parent's spread cap and the scene. The
+//! merge is the whole solve, taking each pure estimate from the shards when they hold it and computing
+//! everything else (near links, later passes, what the budget or a near link made differ): its bytes
+//! are those of a single-machine solve by construction.
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, OnceLock};
+
+use super::links::{estimate, is_near};
+use super::nodes::Nodes;
+use super::tree_path::{tree_path, TreePath};
+use super::visibility::VisibilityContext;
+
+/// A link estimate's identity: both ends' paths and the spread cap it inherited (`links::estimate`
+/// caps its spread there). Everything else it depends on is fixed by the scene and its settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct EstimateKey {
+    pub receiver: TreePath,
+    pub source: TreePath,
+    pub spread_cap_bits: u32,
+}
+
+/// A pure estimate and its value ((form factor, spread), or `None`: the link was dropped).
+pub type SharedEstimate = (EstimateKey, Option<(f32, f32)>);
+
+/// Receivers grouped for sharding: a shard of N aims at about this many groups per shard, so that
+/// assigning whole groups keeps the shards balanced.
+pub const GROUPS_PER_SHARD: usize = 16;
+
+/// Build nodes above the groups: their links are refined by every shard.
+const SHARED: u32 = u32::MAX;
+
+/// What a sharded pass one shares: a shard's receivers and the pure estimates it records, or the
+/// estimates a merge takes from the parts.
+#[derive(Debug, Default)]
+pub struct SharedEstimates {
+    /// (K, N) for shard K of N; `None` for a merge.
+    shard: Option<(u32, u32)>,
+    /// Per build node (`Nodes` before refinement): the shard that refines the links it receives, or
+    /// `SHARED`. Set by `assign_receivers`.
+    owners: OnceLock<Vec<u32>>,
+    /// A merge's estimates from the parts.
+    known: HashMap<EstimateKey, Option<(f32, f32)>>,
+    /// A shard's pure estimates so far.
+    recorded: Mutex<Vec<SharedEstimate>>,
+    /// Estimates a merge took from `known`.
+    hits: AtomicU64,
+}
+
+impl SharedEstimates {
+    /// Shard `index` of `count`: refines its receivers' links in pass one and records them.
+    pub fn for_shard(index: u32, count: u32) -> Self {
+        SharedEstimates { shard: Some((index, count)), ..Default::default() }
+    }
+
+    /// A merge: the whole solve, taking the estimates of `parts` where they fit.
+    pub fn for_merge(parts: impl IntoIterator<Item = SharedEstimate>) -> Self {
+        let mut known = HashMap::new();
+        for (key, value) in parts {
+            known.entry(key).or_insert(value);
+        }
+        SharedEstimates { known, ..Default::default() }
+    }
+
+    /// Whether this is a shard (which stops after pass one's refinement).
+    pub fn is_shard(&self) -> bool {
+        self.shard.is_some()
+    }
+
+    /// Estimates taken from the parts so far.
+    pub fn hits(&self) -> u64 {
+        self.hits.load(Ordering::Relaxed)
+    }
+
+    /// Estimates the parts hold.
+    pub fn known_len(&self) -> usize {
+        self.known.len()
+    }
+
+    /// A shard's recorded estimates, sorted by key and without repeats.
+    pub fn take_recorded(&self) -> Vec<SharedEstimate> {
+        let mut recorded = std::mem::take(&mut *self.recorded.lock().unwrap_or_else(|e| e.into_inner()));
+        recorded.sort_by_key(|e| e.0);
+        recorded.dedup_by_key(|e| e.0);
+        recorded
+    }
+
+    /// Groups the receivers of the built tree (`nodes` before any refinement, root `root`) and gives
+    /// each group to a shard. A group is the subtree of the topmost node holding at most
+    /// ⌈T / (`GROUPS_PER_SHARD`·N)⌉ of the T input triangles; the nodes above are shared. Groups go
+    /// to shards largest first, each to the shard with the least so far (longest processing time
+    /// first), weighed by the power they can reflect (area × largest reflectance channel, plus a
+    /// thousandth of the mean so black groups spread too). Only a shard needs this.
+    pub fn assign_receivers(&self, nodes: &Nodes, root: usize) {
+        let Some((_, count)) = self.shard else { return };
+        let n = nodes.len();
+        let mut inputs = vec![0usize; n];
+        for i in (0..n).rev() {
+            inputs[i] = if nodes.is_cluster[i] { nodes.children(i).map(|c| inputs[c]).sum() } else { 1 };
+        }
+        let limit = inputs[root].div_ceil(GROUPS_PER_SHARD * count as usize).max(1);
+        let mut owners = vec![SHARED; n];
+        let mut groups = Vec::new();
+        let mut stack = vec![root];
+        while let Some(at) = stack.pop() {
+            if inputs[at] <= limit || !nodes.is_cluster[at] {
+                groups.push(at);
+            } else {
+                stack.extend(nodes.children(at));
+            }
+        }
+        let weight = |g: usize| nodes.area[g] as f64 * nodes.reflectance_max[g] as f64;
+        let floor = groups.iter().map(|&g| weight(g)).sum::<f64>() / groups.len().max(1) as f64 * 1e-3;
+        groups.sort_by(|&a, &b| weight(b).total_cmp(&weight(a)).then(a.cmp(&b)));
+        let mut load = vec![0.0f64; count as usize];
+        for g in groups {
+            let shard = (0..load.len()).min_by(|&a, &b| load[a].total_cmp(&load[b]).then(a.cmp(&b))).unwrap_or(0);
+            load[shard] += weight(g) + floor;
+            let mut stack = vec![g];
+            while let Some(at) = stack.pop() {
+                owners[at] = shard as u32;
+                stack.extend(nodes.children(at));
+            }
+        }
+        let _ = self.owners.set(owners);
+    }
+
+    /// Whether this run refines the links that `receiver` receives: always for a merge; for a shard,
+    /// when the build node it lies in is shared or the shard's.
+    pub fn refines_receiver(&self, nodes: &Nodes, receiver: usize) -> bool {
+        let (Some((index, _)), Some(owners)) = (self.shard, self.owners.get()) else { return true };
+        let mut at = receiver;
+        while at >= owners.len() {
+            at = nodes.parent[at] as usize;
+        }
+        owners[at] == SHARED || owners[at] == index
+    }
+
+    /// A shard records the pure estimates among `links` (receiver, source, spread cap) with their
+    /// `values`.
+    pub fn record(&self, nodes: &Nodes, links: impl Iterator<Item = (u32, u32, f32)>, values: &[Option<(f32, f32)>]) {
+        if !self.is_shard() {
+            return;
+        }
+        let new: Vec<SharedEstimate> = links
+            .zip(values)
+            .filter_map(|((r, s, cap), &value)| pure_key(nodes, r as usize, s as usize, cap).map(|k| (k, value)))
+            .collect();
+        self.recorded.lock().unwrap_or_else(|e| e.into_inner()).extend(new);
+    }
+}
+
+/// The key of link (receiver ← source) with spread cap `spread_cap` if its estimate is pure (not a
+/// near link, both ends' paths exact).
+pub fn pure_key(nodes: &Nodes, receiver: usize, source: usize, spread_cap: f32) -> Option<EstimateKey> {
+    if is_near(nodes, receiver, source) {
+        return None;
+    }
+    Some(EstimateKey {
+        receiver: tree_path(nodes, receiver)?,
+        source: tree_path(nodes, source)?,
+        spread_cap_bits: spread_cap.to_bits(),
+    })
+}
+
+/// `links::estimate` of link (receiver ← source), taken from a merge's parts when they hold it.
+pub fn estimate_shared(
+    shared: Option<&SharedEstimates>,
+    nodes: &Nodes,
+    ctx: &VisibilityContext,
+    receiver: usize,
+    source: usize,
+    spread_cap: f32,
+    threshold_w: f64,
+) -> Option<(f32, f32)> {
+    if let Some(shared) = shared.filter(|s| !s.known.is_empty()) {
+        if let Some(value) = pure_key(nodes, receiver, source, spread_cap).and_then(|k| shared.known.get(&k)) {
+            shared.hits.fetch_add(1, Ordering::Relaxed);
+            return *value;
+        }
+    }
+    estimate(nodes, ctx, receiver, source, spread_cap, threshold_w)
+}
