@@ -174,7 +174,8 @@ pub struct SolveArgs {
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
     /// Compute only the form-factor rows of every N-th receiver group, starting at K (0-based), and
-    /// write them to -o as a part for --merge.
+    /// write them to -o as a part for --merge (hierarchical method: refine pass one for this shard's
+    /// receiver groups and write its link estimates).
     #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, conflicts_with = "merge")]
     pub shard: Option<Shard>,
     /// Join the parts of `--shard 0/N` … `--shard N-1/N` (each exactly once) and solve.

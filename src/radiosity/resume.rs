@@ -2,7 +2,8 @@
 //! finished so far, rewritten at most every `CHECKPOINT_INTERVAL`), the shard a run computes
 //! (`--shard K/N`: every N-th group of receivers) and the parts a merge joins (`--merge`). All of
 //! them are row-block files (`matrix::rows_file`), checked against the scene's keys. A hierarchical
-//! solve's checkpoint is its log of link estimates in the same container (`hierarchy::links_file`).
+//! solve's checkpoint is its log of link estimates in the same container (`hierarchy::links_file`),
+//! and so are its shard parts (`hierarchy::part_file`).
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -61,7 +62,7 @@ impl Resume {
         self.shard.unwrap_or(Shard::WHOLE)
     }
 
-    /// Whether the run needs the stored matrix (a shard or a merge).
+    /// Whether the run shards or merges (the stored matrix or the hierarchy, `method::shard_method`).
     pub fn needs_matrix(&self) -> bool {
         self.shard.is_some() || !self.merge.is_empty()
     }

@@ -192,3 +192,34 @@ pub fn estimate_shared(
     }
     estimate(nodes, ctx, receiver, source, spread_cap, threshold_w)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::radiosity::hierarchy::{clusters, procedural};
+
+    /// Every receiver is refined by exactly one shard of N, or by all of them (the shared clusters
+    /// above the groups, a small share of the tree); and a merge refines every receiver.
+    #[test]
+    fn every_receiver_belongs_to_one_shard_or_to_all() {
+        let (nodes, root, _, _) = clusters::build(&procedural::room_with_objects(400)).unwrap();
+        assert!(SharedEstimates::for_merge(Vec::new()).refines_receiver(&nodes, root as usize));
+        for count in 1..6u32 {
+            let shards: Vec<SharedEstimates> = (0..count).map(|k| SharedEstimates::for_shard(k, count)).collect();
+            shards.iter().for_each(|s| s.assign_receivers(&nodes, root as usize));
+            let mut shared = 0;
+            let mut per_shard = vec![0usize; count as usize];
+            for n in 0..nodes.len() {
+                let owners: Vec<usize> =
+                    (0..count as usize).filter(|&k| shards[k].refines_receiver(&nodes, n)).collect();
+                match owners.len() {
+                    1 => per_shard[owners[0]] += 1,
+                    c if c == count as usize => shared += 1,
+                    c => panic!("node {n} refined by {c} of {count} shards"),
+                }
+            }
+            assert!(shared * 4 < nodes.len(), "{shared} of {} nodes shared by {count} shards", nodes.len());
+            assert!(count == 1 || per_shard.iter().all(|&n| n > 0), "every shard has receivers: {per_shard:?}");
+        }
+    }
+}
