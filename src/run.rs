@@ -24,7 +24,7 @@ use crate::progress::{Progress, Verbosity};
 use crate::radiosity::hierarchical;
 use crate::radiosity::matrix::rows_file::RowsFileError;
 use crate::radiosity::method::{self, MethodError, Reuse, ShardMethod};
-use crate::radiosity::resume::{self, Checkpointer, Resume};
+use crate::radiosity::resume::{self, Checkpointer, Resume, ShardError};
 use crate::radiosity::solution_file::{self, SolutionFileError};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
@@ -221,6 +221,9 @@ impl Runner {
         let photons = RunPhotons::default();
         if let (Work::Solve { output }, Some(shard)) = (&job.work, self.reuse.resume.shard) {
             match method::shard_method(&scene).map_err(MethodError::from)? {
+                ShardMethod::Matrix(_) if !self.reuse.resume.merge.is_empty() => {
+                    return Err(MethodError::from(ShardError::MatrixRounds).into());
+                }
                 ShardMethod::Matrix(matrix) => {
                     let mesh = build_mesh(&scene, progress)?;
                     let (rows, stats) = matrix.shard_rows(&scene, &mesh, &photons, &self.reuse.resume, progress)?;

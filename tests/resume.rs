@@ -323,22 +323,47 @@ fn a_damaged_or_foreign_hierarchical_checkpoint_is_ignored_with_a_warning() {
     assert!(std::fs::read(&output).unwrap() == reference);
 }
 
+/// Both refinement passes of the preview Cornell box sharded three ways (pass two's shards take
+/// pass one's parts), then merged.
 #[test]
 fn three_hierarchical_shards_of_the_cornell_box_merge_to_the_bytes_of_a_single_solve() {
     let dir = tempfile::tempdir().unwrap();
     let (reference, _) = uninterrupted_hierarchical_solution(dir.path());
-    let part = |k: usize| dir.path().join(format!("part.{k}")).display().to_string();
-    for k in 0..3 {
-        let shard = format!("{k}/3");
-        let out = radray(&preview_args(&part(k), &["--method", "hierarchical", "--shard", &shard]));
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let (header, _) = part_file::read(Path::new(&part(k))).unwrap();
-        assert_eq!((header.kind, header.shard_index, header.shard_count), (RowsKind::HierarchyShardPart, k as u32, 3));
+    let part = |pass: u32, k: usize| dir.path().join(format!("p{pass}.{k}")).display().to_string();
+    let first: Vec<String> = (0..3).map(|k| part(1, k)).collect();
+    for pass in [1, 2] {
+        for k in 0..3 {
+            let shard = format!("{k}/3");
+            let target = part(pass, k);
+            let mut args = vec!["--method", "hierarchical", "--shard", &shard];
+            if pass == 2 {
+                args.push("--merge");
+                args.extend(first.iter().map(String::as_str));
+            }
+            let out = radray(&preview_args(&target, &args));
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            let (header, written) = part_file::read(Path::new(&target)).unwrap();
+            assert_eq!(
+                (header.kind, header.shard_index, header.shard_count),
+                (RowsKind::HierarchyShardPart, k as u32, 3)
+            );
+            assert_eq!(written.pass, pass);
+        }
     }
+    // A third round has nothing left to shard.
+    let all: Vec<String> = (1..=2).flat_map(|pass| (0..3).map(move |k| (pass, k))).map(|(p, k)| part(p, k)).collect();
+    let mut args = vec!["--method", "hierarchical", "--shard", "0/3", "--merge"];
+    args.extend(all.iter().map(String::as_str));
+    let extra = dir.path().join("p3.0").display().to_string();
+    let out = radray(&preview_args(&extra, &args));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("merge them without --shard"));
+
     let merged = dir.path().join("merged.radsol").display().to_string();
     let stats = dir.path().join("merged.json").display().to_string();
     // Parts in any order.
-    let args = ["--method", "hierarchical", "--stats", &stats, "--merge", &part(1), &part(2), &part(0)];
+    let mut args = vec!["--method", "hierarchical", "--stats", &stats, "--merge"];
+    args.extend(all.iter().rev().map(String::as_str));
     let out = radray(&preview_args(&merged, &args));
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(std::fs::read(&merged).unwrap() == reference, "merged bytes differ from a single solve's");
@@ -352,7 +377,8 @@ fn three_hierarchical_shards_of_the_cornell_box_merge_to_the_bytes_of_a_single_s
     let args = ["solve", &scene, "--quality", "preview", "--method", "hierarchical", "--shard", "0/3", "-o", &foreign];
     assert!(radray(&args).status.success());
     let target = dir.path().join("refused.radsol").display().to_string();
-    let out = radray(&preview_args(&target, &["--method", "hierarchical", "--merge", &part(0), &foreign, &part(2)]));
+    let out =
+        radray(&preview_args(&target, &["--method", "hierarchical", "--merge", &part(1, 0), &foreign, &part(1, 2)]));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("foreign.0") && stderr.contains("made for another scene"), "{stderr}");
@@ -367,6 +393,7 @@ fn a_matrix_free_scene_is_refused_by_shard_with_a_message() {
     let text = std::fs::read_to_string(cornell_box())
         .unwrap()
         .replace("[radiosity]", "[radiosity]\nstore_form_factors = false")
+        .replace("solver = \"gauss-seidel\"", "solver = \"progressive\"")
         .replace("obj = \"cornell_original/scene.obj\"", &format!("obj = {:?}", obj.display().to_string()));
     std::fs::write(&scene, text).unwrap();
     let target = dir.path().join("part.0").display().to_string();

@@ -17,6 +17,7 @@ use rayon::prelude::*;
 
 use super::fingerprint::Fnv1a64;
 use super::hierarchy::estimates::{EstimateHooks, EstimateLog};
+use super::hierarchy::part_file::HierarchyPart;
 use super::hierarchy::shards::SharedEstimates;
 use super::hierarchy::{
     self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyError, HierarchyParams, HierarchyProgress,
@@ -298,7 +299,7 @@ impl PassOneMethod for Hierarchical {
         // A merge (`--merge`): the whole solve, with the shards' estimates (`hierarchy::shards`).
         let shared = match resume.merge.is_empty() {
             true => None,
-            false => Some(SharedEstimates::for_merge(resume::merge_hierarchy_parts(&resume.merge, keys)?)),
+            false => Some(SharedEstimates::for_merge(resume::merge_hierarchy_parts(&resume.merge, keys)?.1)),
         };
         let load_seconds = load_start.elapsed().as_secs_f64();
         let mut checkpointer =
@@ -456,9 +457,11 @@ impl PassOneMethod for Hierarchical {
 }
 
 impl Hierarchical {
-    /// Shard `shard` of a hierarchical pass one (`solve --shard K/N`): refines the first pass for the
-    /// shard's receiver groups (`hierarchy::shards`) and writes its pure link estimates to `output` as
-    /// a part for `--merge`. A shard keeps no checkpoint (an interrupted shard starts again).
+    /// Shard `shard` of a hierarchical solve (`solve --shard K/N [--merge PARTS]`): with the parts of
+    /// passes 1..p (none for p = 0), runs those passes whole (taking their pure estimates from the
+    /// parts), refines pass p + 1 for the shard's receiver groups (`hierarchy::shards`) and writes
+    /// its pure link estimates to `output` as a part for the next round or `--merge`. A shard keeps
+    /// no checkpoint (an interrupted shard starts again).
     pub fn shard_part(
         &self,
         scene: &SceneDescription,
@@ -474,9 +477,17 @@ impl Hierarchical {
             fingerprint: scene_fingerprint(scene, &params, &textures),
             form_factor_key: link_key(scene, &params, &textures),
         };
+        let (done, earlier) = match resume.merge.is_empty() {
+            true => (0, Vec::new()),
+            false => resume::merge_hierarchy_parts(&resume.merge, keys)?,
+        };
+        let pass = done + 1;
+        if pass > params.refinement_passes {
+            return Err(resume::ShardError::EveryPassDone { passes: params.refinement_passes }.into());
+        }
         let stage = progress.stage("hierarchy shard", 1, "passes");
         let start = Instant::now();
-        let shared = SharedEstimates::for_shard(shard.index, shard.count);
+        let shared = SharedEstimates::for_shard(shard.index, shard.count, pass, earlier);
         let mut log = EstimateLog::default();
         let cancel = &resume.cancel;
         let stop = || cancel.is_requested();
@@ -484,9 +495,9 @@ impl Hierarchical {
         let mut hooks =
             EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: Some(&shared) };
         let solved = hierarchy::solve_logged(scene, textures, &params, None, &mut hooks, &mut |p| {
-            if let HierarchyProgress::Refining { round, links, nodes, .. } = p {
+            if let HierarchyProgress::Refining { pass, round, links, nodes } = p {
                 stage.set_message(format!(
-                    "shard {}/{} round {round}: {nodes} nodes, {links} links",
+                    "shard {}/{} pass {pass} round {round}: {nodes} nodes, {links} links",
                     shard.index, shard.count
                 ));
             }
@@ -500,14 +511,15 @@ impl Hierarchical {
                 other.map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?
             }
         };
-        let entries = shared.take_recorded();
-        resume::write_hierarchy_part(output, keys, shard, &entries).map_err(resume::ShardError::from)?;
+        let part = HierarchyPart { pass, entries: shared.take_recorded() };
+        resume::write_hierarchy_part(output, keys, shard, &part).map_err(resume::ShardError::from)?;
         stage.finish(&format!(
-            "shard {}/{}: {} links estimated, {} of them shared with the merge",
+            "shard {}/{} of pass {pass}: {} links estimated ({} from the parts), {} of them shared",
             shard.index,
             shard.count,
             log.computed,
-            entries.len()
+            shared.hits(),
+            part.entries.len()
         ));
         Ok(PassOneStats {
             solver: Some(self.name()),

@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::hierarchy::estimates::{EstimateLog, LoggedEstimate};
+use super::hierarchy::links_file;
+use super::hierarchy::part_file::{self, HierarchyPart};
 use super::hierarchy::shards::SharedEstimate;
-use super::hierarchy::{links_file, part_file};
 use super::matrix::rows_file::{self, RowsFileError, RowsHeader, RowsKind};
 use super::matrix::{FormFactors, PartialRows};
 use crate::interrupt::Cancel;
@@ -253,23 +254,40 @@ pub enum ShardError {
     ElementCounts,
     #[error("--merge needs at least one part")]
     NoParts,
+    #[error("the parts of refinement pass {pass} are missing (the parts go up to pass {passes}); run its shards with the parts of the passes before it")]
+    MissingPass { pass: u32, passes: u32 },
+    #[error("the parts hold all {passes} refinement passes of this scene; merge them without --shard")]
+    EveryPassDone { passes: u32 },
+    #[error("--shard with --merge shards a later refinement pass of the hierarchical method; the matrix method shards in one round")]
+    MatrixRounds,
     #[error("{}: incomplete: {missing} of its rows are missing", path.display())]
     Incomplete { path: PathBuf, missing: usize },
     #[error("{scene}: sharding and merging need the stored matrix ([radiosity] method = \"matrix\", store_form_factors = true) or the hierarchy; this scene uses {method}")]
     NotMatrix { scene: String, method: String },
 }
 
-/// Reads the parts at `paths` with `read` and checks them: every one a `kind` part of this scene,
-/// all of the same count N, each K in 0..N exactly once.
-fn checked_parts<T>(
+/// The parts at `paths` as `read` finds them.
+fn read_parts<T>(
     paths: &[PathBuf],
-    keys: SceneKeys,
-    kind: RowsKind,
     read: impl Fn(&Path) -> Result<(RowsHeader, T), RowsFileError>,
 ) -> Result<Vec<(PathBuf, RowsHeader, T)>, ShardError> {
-    let mut parts: Vec<(PathBuf, RowsHeader, T)> = Vec::with_capacity(paths.len());
-    for path in paths {
-        let (header, payload) = read(path)?;
+    paths
+        .iter()
+        .map(|path| read(path).map(|(header, payload)| (path.clone(), header, payload)))
+        .collect::<Result<_, _>>()
+        .map_err(ShardError::from)
+}
+
+/// Checks parts: every one a `kind` part of this scene, all of the same count N, each K in 0..N
+/// exactly once.
+fn checked_parts<T>(
+    read: Vec<(PathBuf, RowsHeader, T)>,
+    keys: SceneKeys,
+    kind: RowsKind,
+) -> Result<Vec<(PathBuf, RowsHeader, T)>, ShardError> {
+    let mut parts: Vec<(PathBuf, RowsHeader, T)> = Vec::with_capacity(read.len());
+    for (path, header, payload) in read {
+        let path = &path;
         if header.kind != kind {
             return Err(ShardError::NotAPart { path: path.clone() });
         }
@@ -311,7 +329,7 @@ fn checked_parts<T>(
 /// Joins the parts of a sharded pass one: every part must be a finished shard part of this scene,
 /// all of the same count N, each K in 0..N exactly once, and together they must hold every row.
 pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, ShardError> {
-    let parts = checked_parts(paths, keys, RowsKind::ShardPart, rows_file::read)?;
+    let parts = checked_parts(read_parts(paths, rows_file::read)?, keys, RowsKind::ShardPart)?;
     for (path, header, rows) in &parts {
         let shard = Shard { index: header.shard_index, count: header.shard_count };
         let missing = (0..rows.len()).filter(|&i| shard.selects(i) && !rows.done[i]).count();
@@ -323,20 +341,33 @@ pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, Sh
     PartialRows::union(&rows).ok_or(ShardError::ElementCounts)
 }
 
-/// The link estimates of a sharded hierarchical pass one, checked like `merge_parts`'s rows (every
-/// part of this scene and settings, each shard once), all parts' entries in one list.
-pub fn merge_hierarchy_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<Vec<SharedEstimate>, ShardError> {
-    let parts = checked_parts(paths, keys, RowsKind::HierarchyShardPart, part_file::read)?;
-    Ok(parts.into_iter().flat_map(|(_, _, entries)| entries).collect())
+/// The link estimates of a sharded hierarchical solve: the parts of passes 1..=P, each pass's
+/// checked like `merge_parts`'s rows (every part of this scene and settings, each shard once), and
+/// no pass missing below P. Returns P and all parts' entries in one list.
+pub fn merge_hierarchy_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<(u32, Vec<SharedEstimate>), ShardError> {
+    let mut parts = read_parts(paths, part_file::read)?;
+    let passes = parts.iter().map(|(_, _, part)| part.pass).max().ok_or(ShardError::NoParts)?;
+    let mut entries = Vec::new();
+    for pass in (1..=passes).rev() {
+        let (this, rest) = parts.into_iter().partition(|(_, _, part)| part.pass == pass);
+        parts = rest;
+        if Vec::is_empty(&this) {
+            return Err(ShardError::MissingPass { pass, passes });
+        }
+        for (_, _, part) in checked_parts(this, keys, RowsKind::HierarchyShardPart)? {
+            entries.extend(part.entries);
+        }
+    }
+    Ok((passes, entries))
 }
 
-/// Writes shard `shard`'s pure link estimates of a hierarchical pass one as a part for
+/// Writes shard `shard`'s pure link estimates of a hierarchical refinement pass as a part for
 /// `merge_hierarchy_parts`.
 pub fn write_hierarchy_part(
     path: &Path,
     keys: SceneKeys,
     shard: Shard,
-    entries: &[SharedEstimate],
+    part: &HierarchyPart,
 ) -> Result<(), RowsFileError> {
     let header = RowsHeader {
         kind: RowsKind::HierarchyShardPart,
@@ -345,7 +376,7 @@ pub fn write_hierarchy_part(
         shard_index: shard.index,
         shard_count: shard.count,
     };
-    part_file::write(path, &header, entries)
+    part_file::write(path, &header, part)
 }
 
 /// Writes shard `shard`'s finished rows as a part for `merge_parts`.

@@ -321,8 +321,8 @@ pub fn solve_reusing(
 /// again) and the solve ends with the bytes of an uninterrupted one. `hooks.stop` is polled between
 /// chunks of estimates and between sweeps; when it asks, this returns `HierarchyError::Stopped` with
 /// the log holding every estimate made so far (the caller's checkpoint). With `hooks.shared` it is a
-/// shard of pass one (refines its receivers' links in the first pass and stops, its solution unswept)
-/// or a merge (the whole solve, with the shards' pure estimates; see `shards`).
+/// shard (runs the passes before its own whole, refines its own for its receivers and stops, that
+/// pass unswept) or a merge (the whole solve, with the shards' pure estimates; see `shards`).
 pub fn solve_logged(
     scene: &SceneDescription,
     textures: Arc<SceneTextures>,
@@ -378,11 +378,14 @@ pub fn solve_logged(
     if let Some(shared) = hooks.shared {
         shared.assign_receivers(&nodes, root);
     }
-    // A shard of pass one (`shards`) stops after the first refinement: later passes need every link.
-    let shard_only = hooks.shared.is_some_and(|s| s.is_shard());
+    // A shard (`shards`) stops after refining its pass for its receivers.
+    let shard_pass = hooks.shared.and_then(|s| s.shard_pass());
     match reuse {
         None => {
             for pass in 1..=params.refinement_passes {
+                if let Some(shared) = hooks.shared {
+                    shared.begin_pass(pass);
+                }
                 let (records, self_links) = if pass == 1 {
                     (Vec::new(), if nodes.is_cluster[root] { vec![root as u32] } else { Vec::new() })
                 } else {
@@ -401,7 +404,7 @@ pub fn solve_logged(
                 )?;
                 stats.add_refinement(pass, &outcome, outcome.error_after_w);
                 links = outcome.links;
-                if shard_only {
+                if shard_pass == Some(pass) {
                     break;
                 }
                 sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, hooks.stop, on_progress)?;

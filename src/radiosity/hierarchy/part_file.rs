@@ -1,13 +1,14 @@
-//! A shard part of a hierarchical pass one (`solve --shard K/N`): the shard's pure link estimates
-//! (`shards`) in the row-block container (`matrix::rows_file`, kind `HierarchyShardPart`: same
-//! header, checksum and atomic write).
+//! A shard part of a hierarchical solve (`solve --shard K/N`): the refinement pass the shard refined
+//! and its pure link estimates (`shards`), in the row-block container (`matrix::rows_file`, kind
+//! `HierarchyShardPart`: same header, checksum and atomic write).
 //!
-//! Payload, little-endian: entries n u64, then per entry: receiver path and source path (each: root
+//! Payload, little-endian: pass u32, entries n u64, then per entry: receiver path and source path (each: root
 //! u32, depth u32, steps u128), spread cap f32, present u8 (0: the estimate was `None`), form factor
 //! f32, spread f32.
 
 use std::path::Path;
 
+use super::links_file::{push_value, read_value};
 use super::shards::{EstimateKey, SharedEstimate};
 use super::tree_path::{TreePath, MAX_EXACT_DEPTH};
 use crate::radiosity::matrix::rows_file::{self, Payload, RowsFileError, RowsHeader, RowsKind};
@@ -20,12 +21,21 @@ fn wrong_kind(path: &Path, found: RowsKind) -> RowsFileError {
     RowsFileError::WrongKind { path: path.to_path_buf(), found, expected: "hierarchical link estimates of a shard" }
 }
 
-/// Writes `entries` under `header` (whose kind must be `HierarchyShardPart`) to `path`, atomically.
-pub fn write(path: &Path, header: &RowsHeader, entries: &[SharedEstimate]) -> Result<(), RowsFileError> {
+/// What a part holds: the pass its shard refined (1-based) and its estimates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HierarchyPart {
+    pub pass: u32,
+    pub entries: Vec<SharedEstimate>,
+}
+
+/// Writes `part` under `header` (whose kind must be `HierarchyShardPart`) to `path`, atomically.
+pub fn write(path: &Path, header: &RowsHeader, part: &HierarchyPart) -> Result<(), RowsFileError> {
     if header.kind != RowsKind::HierarchyShardPart {
         return Err(wrong_kind(path, header.kind));
     }
+    let entries = &part.entries;
     rows_file::write_container(path, header, &mut |out| {
+        out.write_all(&part.pass.to_le_bytes())?;
         out.write_all(&(entries.len() as u64).to_le_bytes())?;
         let mut bytes = Vec::with_capacity(ENTRY_BYTES);
         for (key, value) in entries {
@@ -36,31 +46,29 @@ pub fn write(path: &Path, header: &RowsHeader, entries: &[SharedEstimate]) -> Re
                 bytes.extend_from_slice(&p.steps.to_le_bytes());
             }
             bytes.extend_from_slice(&key.spread_cap_bits.to_le_bytes());
-            let (present, (f, spread)) = match value {
-                Some(v) => (1u8, *v),
-                None => (0u8, (0.0, 0.0)),
-            };
-            bytes.push(present);
-            bytes.extend_from_slice(&f.to_bits().to_le_bytes());
-            bytes.extend_from_slice(&spread.to_bits().to_le_bytes());
+            push_value(&mut bytes, *value);
             out.write_all(&bytes)?;
         }
         Ok(())
     })
 }
 
-/// Reads a hierarchical shard part: its header and its estimates. Damage, another kind of file, or an
-/// entry count beyond the file's size is an error, never a panic or a huge allocation.
-pub fn read(path: &Path) -> Result<(RowsHeader, Vec<SharedEstimate>), RowsFileError> {
+/// Reads a hierarchical shard part: its header, pass and estimates. Damage, another kind of file, or
+/// an entry count beyond the file's size is an error, never a panic or a huge allocation.
+pub fn read(path: &Path) -> Result<(RowsHeader, HierarchyPart), RowsFileError> {
     let bytes = std::fs::read(path).map_err(|source| RowsFileError::Io { path: path.to_path_buf(), source })?;
     parse(path, &bytes)
 }
 
 /// `read` over bytes already in memory; `path` names them in errors.
-pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, Vec<SharedEstimate>), RowsFileError> {
+pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, HierarchyPart), RowsFileError> {
     let (header, mut r) = rows_file::parse_container(path, bytes)?;
     if header.kind != RowsKind::HierarchyShardPart {
         return Err(wrong_kind(path, header.kind));
+    }
+    let pass = r.u32()?;
+    if pass == 0 {
+        return Err(r.damaged("pass 0".into()));
     }
     let n = r.u64()?;
     if n.saturating_mul(ENTRY_BYTES as u64) != r.remaining() as u64 {
@@ -71,18 +79,11 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, Vec<SharedEstimat
         let receiver = tree_path(&mut r)?;
         let source = tree_path(&mut r)?;
         let spread_cap_bits = r.u32()?;
-        let present = r.u8()?;
-        let f = f32::from_bits(r.u32()?);
-        let spread = f32::from_bits(r.u32()?);
-        let value = match present {
-            0 => None,
-            1 => Some((f, spread)),
-            p => return Err(r.damaged(format!("presence flag {p}"))),
-        };
+        let value = read_value(&mut r)?;
         entries.push((EstimateKey { receiver, source, spread_cap_bits }, value));
     }
     r.finish()?;
-    Ok((header, entries))
+    Ok((header, HierarchyPart { pass, entries }))
 }
 
 fn tree_path(r: &mut Payload) -> Result<TreePath, RowsFileError> {
@@ -99,7 +100,7 @@ fn tree_path(r: &mut Payload) -> Result<TreePath, RowsFileError> {
 mod tests {
     use super::*;
 
-    fn sample() -> (RowsHeader, Vec<SharedEstimate>) {
+    fn sample() -> (RowsHeader, HierarchyPart) {
         let header = RowsHeader {
             kind: RowsKind::HierarchyShardPart,
             fingerprint: 7,
@@ -113,7 +114,7 @@ mod tests {
             (key(path(3, 0, 0), path(4, 2, 0b1110), 1.0), Some((0.25, 0.5))),
             (key(path(5, 64, u128::MAX), path(4, 0, 0), f32::INFINITY), None),
         ];
-        (header, entries)
+        (header, HierarchyPart { pass: 2, entries })
     }
 
     #[test]

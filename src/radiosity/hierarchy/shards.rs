@@ -1,11 +1,13 @@
-//! Pass one of the hierarchy split over machines (`solve --shard K/N`, `--merge`): which receivers a
-//! shard refines, and the link estimates shards hand to the merge, keyed by the tree paths of the
-//! link's ends (`tree_path`) so that they do not depend on the order in which nodes were subdivided.
+//! The hierarchy's refinement split over machines (`solve --shard K/N`, `--merge`), one pass per
+//! round of shards: which receivers a shard refines, and the link estimates shards hand to the next
+//! round and the merge, keyed by the tree paths of the link's ends (`tree_path`) so that they do not
+//! depend on the order in which nodes were subdivided.
 //!
 //! Refinement is a forest below the root's self-link: a link's children keep its receiver or take a
 //! child of it, so a shard that drops the new links of receivers it does not own refines its own
 //! receivers' links exactly as far as the whole solve, as long as the decisions do not look beyond the
-//! link. They do not in pass one (every exitance is the emission), except near links, whose form
+//! link. They do not (within a pass, the exitance is the one every shard solved alike, and pieces
+//! made in it inherit their parent's), except near links, whose form
 //! factor integrates over the leaves found below their ends when they are estimated, and the memory
 //! budget. So a shard records only *pure* estimates: links that are not near (element ← element, far
 //! links with a cluster end), a function of the two paths, the parent's spread cap and the scene. The
@@ -14,7 +16,7 @@
 //! are those of a single-machine solve by construction.
 
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Mutex, OnceLock};
 
 use super::links::{estimate, is_near};
@@ -41,12 +43,22 @@ pub const GROUPS_PER_SHARD: usize = 16;
 /// Build nodes above the groups: their links are refined by every shard.
 const SHARED: u32 = u32::MAX;
 
-/// What a sharded pass one shares: a shard's receivers and the pure estimates it records, or the
-/// estimates a merge takes from the parts.
+/// What a sharded solve shares: a shard's receivers and the pure estimates it records, and the
+/// estimates a shard or merge takes from the parts of earlier rounds.
+///
+/// Rounds: the passes after the first re-refine with the exitance solved over every link, so shard
+/// K of N refines one pass, `shard_pass`: it runs the passes before it whole (taking their pure
+/// estimates from the earlier rounds' parts, computing the rest and sweeping), then refines that
+/// pass for its own receivers and stops. Round p's shards need the parts of rounds 1..p; the merge
+/// needs all of them.
 #[derive(Debug, Default)]
 pub struct SharedEstimates {
     /// (K, N) for shard K of N; `None` for a merge.
     shard: Option<(u32, u32)>,
+    /// The pass a shard refines for its receivers (1-based).
+    shard_pass: u32,
+    /// The pass the solve is in (`begin_pass`).
+    pass: AtomicU32,
     /// Per build node (`Nodes` before refinement): the shard that refines the links it receives, or
     /// `SHARED`. Set by `assign_receivers`.
     owners: OnceLock<Vec<u32>>,
@@ -59,9 +71,10 @@ pub struct SharedEstimates {
 }
 
 impl SharedEstimates {
-    /// Shard `index` of `count`: refines its receivers' links in pass one and records them.
-    pub fn for_shard(index: u32, count: u32) -> Self {
-        SharedEstimates { shard: Some((index, count)), ..Default::default() }
+    /// Shard `index` of `count` of pass `pass`: refines its receivers' links in that pass and records
+    /// them, taking the estimates of the earlier passes' parts (`earlier`) where they fit.
+    pub fn for_shard(index: u32, count: u32, pass: u32, earlier: impl IntoIterator<Item = SharedEstimate>) -> Self {
+        SharedEstimates { shard: Some((index, count)), shard_pass: pass, ..SharedEstimates::for_merge(earlier) }
     }
 
     /// A merge: the whole solve, taking the estimates of `parts` where they fit.
@@ -73,9 +86,19 @@ impl SharedEstimates {
         SharedEstimates { known, ..Default::default() }
     }
 
-    /// Whether this is a shard (which stops after pass one's refinement).
-    pub fn is_shard(&self) -> bool {
-        self.shard.is_some()
+    /// The pass a shard refines for its receivers (and stops after); `None` for a merge.
+    pub fn shard_pass(&self) -> Option<u32> {
+        self.shard.map(|_| self.shard_pass)
+    }
+
+    /// The solve enters refinement pass `pass` (1-based).
+    pub fn begin_pass(&self, pass: u32) {
+        self.pass.store(pass, Ordering::Relaxed);
+    }
+
+    /// Whether the solve is in the pass this shard refines for its receivers.
+    fn in_shard_pass(&self) -> bool {
+        self.shard.is_some() && self.pass.load(Ordering::Relaxed) == self.shard_pass
     }
 
     /// Estimates taken from the parts so far.
@@ -136,10 +159,13 @@ impl SharedEstimates {
         let _ = self.owners.set(owners);
     }
 
-    /// Whether this run refines the links that `receiver` receives: always for a merge; for a shard,
-    /// when the build node it lies in is shared or the shard's.
+    /// Whether this run refines the links that `receiver` receives: always for a merge and outside a
+    /// shard's pass; in it, when the build node the receiver lies in is shared or the shard's.
     pub fn refines_receiver(&self, nodes: &Nodes, receiver: usize) -> bool {
         let (Some((index, _)), Some(owners)) = (self.shard, self.owners.get()) else { return true };
+        if !self.in_shard_pass() {
+            return true;
+        }
         let mut at = receiver;
         while at >= owners.len() {
             at = nodes.parent[at] as usize;
@@ -147,10 +173,10 @@ impl SharedEstimates {
         owners[at] == SHARED || owners[at] == index
     }
 
-    /// A shard records the pure estimates among `links` (receiver, source, spread cap) with their
-    /// `values`.
+    /// In its pass, a shard records the pure estimates among `links` (receiver, source, spread cap)
+    /// with their `values`.
     pub fn record(&self, nodes: &Nodes, links: impl Iterator<Item = (u32, u32, f32)>, values: &[Option<(f32, f32)>]) {
-        if !self.is_shard() {
+        if !self.in_shard_pass() {
             return;
         }
         let new: Vec<SharedEstimate> = links
@@ -205,8 +231,12 @@ mod tests {
         let (nodes, root, _, _) = clusters::build(&procedural::room_with_objects(400)).unwrap();
         assert!(SharedEstimates::for_merge(Vec::new()).refines_receiver(&nodes, root as usize));
         for count in 1..6u32 {
-            let shards: Vec<SharedEstimates> = (0..count).map(|k| SharedEstimates::for_shard(k, count)).collect();
-            shards.iter().for_each(|s| s.assign_receivers(&nodes, root as usize));
+            let shards: Vec<SharedEstimates> =
+                (0..count).map(|k| SharedEstimates::for_shard(k, count, 1, Vec::new())).collect();
+            shards.iter().for_each(|s| {
+                s.assign_receivers(&nodes, root as usize);
+                s.begin_pass(1);
+            });
             let mut shared = 0;
             let mut per_shard = vec![0usize; count as usize];
             for n in 0..nodes.len() {
