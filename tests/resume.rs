@@ -369,7 +369,9 @@ fn three_hierarchical_shards_of_the_cornell_box_merge_to_the_bytes_of_a_single_s
     assert!(std::fs::read(&merged).unwrap() == reference, "merged bytes differ from a single solve's");
     let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     let from_parts = stats["resume"]["rows_resumed"].as_u64().unwrap_or(0);
-    assert!(from_parts > 0, "the merge takes estimates from the parts: {stats}");
+    let computed = stats["resume"]["rows_computed"].as_u64().unwrap_or(u64::MAX);
+    // Near links are the merge's own (measured: 1,037 of 429,728).
+    assert!(computed.saturating_mul(20) < from_parts, "the merge computes under 5% of the estimates: {stats}");
 
     // A part of another scene (the empty Cornell box) is refused, naming the file.
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_empty.toml").display().to_string();
