@@ -23,8 +23,8 @@ use crate::output::{self, Exposure, OutputError, ToneCurve};
 use crate::progress::{Progress, Verbosity};
 use crate::radiosity::hierarchical;
 use crate::radiosity::matrix::rows_file::RowsFileError;
-use crate::radiosity::method::{self, MethodError, Reuse};
-use crate::radiosity::resume::{self, Checkpointer, Resume};
+use crate::radiosity::method::{self, MethodError, Reuse, ShardMethod};
+use crate::radiosity::resume::{self, Checkpointer, Resume, ShardError};
 use crate::radiosity::solution_file::{self, SolutionFileError};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
@@ -220,11 +220,22 @@ impl Runner {
         // One set of photons for both passes of this job (traced only if a pass needs them).
         let photons = RunPhotons::default();
         if let (Work::Solve { output }, Some(shard)) = (&job.work, self.reuse.resume.shard) {
-            let matrix = method::matrix_for_shards(&scene).map_err(MethodError::from)?;
-            let mesh = build_mesh(&scene, progress)?;
-            let (rows, stats) = matrix.shard_rows(&scene, &mesh, &photons, &self.reuse.resume, progress)?;
-            outcome.stats.pass_one = stats;
-            resume::write_part(output, method::scene_keys(&scene, &mesh), shard, &rows)?;
+            match method::shard_method(&scene).map_err(MethodError::from)? {
+                ShardMethod::Matrix(_) if !self.reuse.resume.merge.is_empty() => {
+                    return Err(MethodError::from(ShardError::MatrixRounds).into());
+                }
+                ShardMethod::Matrix(matrix) => {
+                    let mesh = build_mesh(&scene, progress)?;
+                    let (rows, stats) = matrix.shard_rows(&scene, &mesh, &photons, &self.reuse.resume, progress)?;
+                    outcome.stats.pass_one = stats;
+                    resume::write_part(output, method::scene_keys(&scene, &mesh), shard, &rows)?;
+                }
+                ShardMethod::Hierarchy(hierarchy) => {
+                    let textures = Arc::new(load_textures(&scene, progress));
+                    outcome.stats.pass_one =
+                        hierarchy.shard_part(&scene, textures, shard, &self.reuse.resume, output, progress)?;
+                }
+            }
             outcome.written.push(output.clone());
             self.remove_checkpoint();
             return Ok(());
@@ -280,7 +291,10 @@ impl Runner {
         }
         let resume = &self.reuse.resume;
         let method: Box<dyn method::PassOneMethod> = if resume.needs_matrix() {
-            Box::new(method::matrix_for_shards(scene).map_err(MethodError::from)?)
+            match method::shard_method(scene).map_err(MethodError::from)? {
+                ShardMethod::Matrix(matrix) => Box::new(matrix),
+                ShardMethod::Hierarchy(hierarchy) => Box::new(hierarchy),
+            }
         } else {
             method::for_scene(scene)
         };

@@ -7,6 +7,8 @@
 
 use rayon::prelude::*;
 
+use super::shards::SharedEstimates;
+
 /// Which estimator produced a logged value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EstimateKind {
@@ -53,11 +55,13 @@ pub const CHUNK_LINKS: usize = 4096;
 
 /// How a solve is stopped and its log saved: `stop` is polled before each chunk of estimates and
 /// between sweeps; `after_chunk` sees the log after each chunk with the number of entries it computed
-/// (a checkpoint writer, the cancellation test hook).
+/// (a checkpoint writer, the cancellation test hook). `shared`: a shard or merge of pass one
+/// (`shards`), `None` for a whole solve.
 pub struct EstimateHooks<'a> {
     pub log: &'a mut EstimateLog,
     pub stop: &'a (dyn Fn() -> bool + Sync),
     pub after_chunk: &'a mut dyn FnMut(&EstimateLog, usize),
+    pub shared: Option<&'a SharedEstimates>,
 }
 
 impl EstimateLog {
@@ -139,7 +143,7 @@ mod tests {
         let calls = std::sync::atomic::AtomicUsize::new(0);
         let stop = || stop_after.is_some_and(|n| calls.load(std::sync::atomic::Ordering::SeqCst) >= n);
         let mut after = |_: &EstimateLog, n: usize| _ = calls.fetch_add(n, std::sync::atomic::Ordering::SeqCst);
-        let mut hooks = EstimateHooks { log, stop: &stop, after_chunk: &mut after };
+        let mut hooks = EstimateHooks { log, stop: &stop, after_chunk: &mut after, shared: None };
         let compute = |i: usize| Some((pairs[i].0 as f32 * 0.5, pairs[i].1 as f32));
         estimate_links(EstimateKind::Link, pairs, &compute, &mut hooks)
             .map(|v| v.iter().map(|e| e.unwrap().0).collect())

@@ -8,10 +8,11 @@ use rayon::prelude::*;
 
 use super::estimates::{estimate_links, EstimateHooks, EstimateKind, EstimateLog, Stopped};
 use super::links::{
-    estimate, link_error_power, near_form_factor, near_push_spread, refinement_error, source_variation_power,
-    LinkRecord, Links, LINK_BYTES,
+    link_error_power, near_form_factor, near_push_spread, refinement_error, source_variation_power, LinkRecord, Links,
+    LINK_BYTES,
 };
 use super::nodes::{Nodes, NODE_BYTES};
+use super::shards::estimate_shared;
 use super::visibility::VisibilityContext;
 
 /// Settings of one refinement pass.
@@ -192,6 +193,10 @@ pub fn refine_logged(
         }
         estimate_kept_near(nodes, ctx, &mut kept, &unestimated, hooks)?;
         nodes.assign_texture_means(first_piece);
+        if let Some(shared) = hooks.shared {
+            // A shard of pass one refines only its own receivers' links (`shards`).
+            next.retain(|p| shared.refines_receiver(nodes, p.receiver as usize));
+        }
         if next.is_empty() {
             break;
         }
@@ -201,13 +206,17 @@ pub fn refine_logged(
         let estimates: Vec<Option<(f32, f32)>> = {
             let nodes: &Nodes = nodes;
             let pairs: Vec<(u32, u32)> = next.iter().map(|p| (p.receiver, p.source)).collect();
+            let shared = hooks.shared;
             let compute = |i: usize| {
                 let p = &next[i];
                 let (r, s) = (p.receiver as usize, p.source as usize);
-                estimate(nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
+                estimate_shared(shared, nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
             };
             estimate_links(EstimateKind::Link, &pairs, &compute, hooks)?
         };
+        if let Some(shared) = hooks.shared {
+            shared.record(nodes, next.iter().map(|p| (p.receiver, p.source, p.spread_cap)), &estimates);
+        }
         work = next
             .iter()
             .zip(estimates)
@@ -232,7 +241,7 @@ pub fn refine(
     on_round: &mut dyn FnMut(u32, usize, usize),
 ) -> RefineOutcome {
     let mut log = EstimateLog::default();
-    let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {} };
+    let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {}, shared: None };
     match refine_logged(nodes, ctx, records, self_links, settings, &mut hooks, on_round) {
         Ok(outcome) => outcome,
         Err(Stopped) => unreachable!("never stopped"),
