@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 
+mod film_stages;
 mod layers;
 
 pub use layers::check_layers_path;
@@ -118,6 +119,10 @@ pub struct RunStats {
     pub rays_per_second: f64,
     pub samples: u64,
     pub adaptive_extra_samples: u64,
+    /// Pixels that took adaptive samples, and the seconds the adaptive pass took (part of
+    /// `render_seconds`).
+    pub adaptive_pixels: u64,
+    pub adaptive_seconds: f64,
     pub peak_memory_bytes: u64,
 }
 
@@ -558,12 +563,8 @@ pub fn render(
     let image = &scene.image;
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
     let tracer = tracer_for(scene, mesh, accel, solution, mode, photons, progress, stats)?;
-    let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
-    let stage = progress.stage(
-        if mode == TraceMode::Final { "render final" } else { "render radiosity" },
-        tiles as u64,
-        "tiles",
-    );
+    let name = if mode == TraceMode::Final { "render final" } else { "render radiosity" };
+    let stages = film_stages::FilmStages::start(progress, name, image);
     let start = Instant::now();
     let (picture, film_stats, counts) = film::render_with(
         image,
@@ -572,7 +573,7 @@ pub fn render(
             let ray = camera.ray(x, y);
             tracer.radiance(ray.origin, ray.dir, mode, sampler, counts)
         },
-        &|| stage.inc(1),
+        &stages,
     );
     let seconds = start.elapsed().as_secs_f64();
     let total: RayCounts = counts.into_iter().sum();
@@ -582,14 +583,17 @@ pub fn render(
     stats.shadow_rays += total.shadow;
     stats.samples += film_stats.samples;
     stats.adaptive_extra_samples += film_stats.adaptive_extra_samples;
+    stats.adaptive_pixels += film_stats.adaptive_pixels;
     let rays = total.primary + total.secondary + total.shadow;
     stats.rays_per_second =
         (stats.primary_rays + stats.secondary_rays + stats.shadow_rays) as f64 / stats.render_seconds.max(1e-9);
-    stage.finish(&format!(
-        "{}×{} at {} spp: {} rays ({:.2} M rays/s)",
+    stats.adaptive_seconds += stages.finish(&format!(
+        "{}×{} at {} spp, {} adaptive samples in {} pixels: {} rays ({:.2} M rays/s) in {seconds:.1} s",
         image.width_px,
         image.height_px,
         image.samples_per_pixel,
+        film_stats.adaptive_extra_samples,
+        film_stats.adaptive_pixels,
         rays,
         rays as f64 / seconds.max(1e-9) / 1e6
     ));
@@ -626,8 +630,12 @@ pub fn tracer_for<'a>(
         return Ok(tracer);
     }
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
-    let stage = progress.stage("final gather prepass", 1, "caches");
-    let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad);
+    let stage = progress.stage("final gather prepass", gather::LEVELS as u64, "levels");
+    let on_level_done = |records: usize| {
+        stage.inc(1);
+        stage.set_message(format!("{records} records"));
+    };
+    let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad, &on_level_done);
     stats.secondary_rays += prepass.rays.total();
     stage.finish(&format!("{} records from {} gathers", prepass.records, prepass.candidates));
     Ok(tracer.with_final_gather(gather))

@@ -70,6 +70,9 @@ pub struct ImageSettings {
     pub adaptive_error: Option<f32>,
     /// Most samples an adaptive pixel may take.
     pub adaptive_max_samples: u32,
+    /// Most adaptive samples the whole image may take, as a multiple of its base samples
+    /// (`film::within_budget`).
+    pub adaptive_budget: f32,
     pub seed: u64,
     /// PNG exposure (`[image] exposure`: stops or "auto"); `--exposure` overrides it.
     pub exposure: crate::output::Exposure,
@@ -93,6 +96,7 @@ impl Default for ImageSettings {
             adaptive_threshold: None,
             adaptive_error: Some(DEFAULT_ADAPTIVE_ERROR),
             adaptive_max_samples: DEFAULT_ADAPTIVE_MAX_SAMPLES,
+            adaptive_budget: crate::film::DEFAULT_ADAPTIVE_BUDGET,
             seed: 0,
             exposure: crate::output::Exposure::default(),
         }
