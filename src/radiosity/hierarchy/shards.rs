@@ -29,7 +29,7 @@ use std::sync::{Mutex, OnceLock};
 use super::links::{estimate, is_near};
 use super::nodes::Nodes;
 use super::solved_state::SolvedState;
-use super::tree_path::{tree_path, TreePath};
+use super::tree_path::TreePath;
 use super::visibility::VisibilityContext;
 use crate::rng::splitmix64;
 
@@ -250,35 +250,46 @@ impl SharedEstimates {
     }
 
     /// In its pass, a shard records the pure estimates among `links` (receiver, source, spread cap)
-    /// with their `values`.
-    pub fn record(&self, nodes: &Nodes, links: impl Iterator<Item = (u32, u32, f32)>, values: &[Option<(f32, f32)>]) {
+    /// with their `values`; `paths` are the nodes' tree paths (`tree_path::extend_paths`).
+    pub fn record(
+        &self,
+        nodes: &Nodes,
+        paths: &[Option<TreePath>],
+        links: impl Iterator<Item = (u32, u32, f32)>,
+        values: &[Option<(f32, f32)>],
+    ) {
         if !self.in_shard_pass() {
             return;
         }
         let new: Vec<SharedEstimate> = links
             .zip(values)
-            .filter_map(|((r, s, cap), &value)| pure_key(nodes, r as usize, s as usize, cap).map(|k| (k, value)))
+            .filter_map(|((r, s, cap), &value)| pure_key(nodes, paths, r as usize, s as usize, cap).map(|k| (k, value)))
             .collect();
         self.recorded.lock().unwrap_or_else(|e| e.into_inner()).extend(new);
     }
 }
 
 /// The key of link (receiver ← source) with spread cap `spread_cap` if its estimate is pure (not a
-/// near link, both ends' paths exact).
-pub fn pure_key(nodes: &Nodes, receiver: usize, source: usize, spread_cap: f32) -> Option<EstimateKey> {
+/// near link, both ends' paths exact); `paths` holds every node's `tree_path`.
+pub fn pure_key(
+    nodes: &Nodes,
+    paths: &[Option<TreePath>],
+    receiver: usize,
+    source: usize,
+    spread_cap: f32,
+) -> Option<EstimateKey> {
     if is_near(nodes, receiver, source) {
         return None;
     }
-    Some(EstimateKey {
-        receiver: tree_path(nodes, receiver)?,
-        source: tree_path(nodes, source)?,
-        spread_cap_bits: spread_cap.to_bits(),
-    })
+    Some(EstimateKey { receiver: paths[receiver]?, source: paths[source]?, spread_cap_bits: spread_cap.to_bits() })
 }
 
-/// `links::estimate` of link (receiver ← source), taken from a merge's parts when they hold it.
+/// `links::estimate` of link (receiver ← source), taken from a merge's parts when they hold it
+/// (`paths`: every node's `tree_path`, or empty without `shared`).
+#[allow(clippy::too_many_arguments)]
 pub fn estimate_shared(
     shared: Option<&SharedEstimates>,
+    paths: &[Option<TreePath>],
     nodes: &Nodes,
     ctx: &VisibilityContext,
     receiver: usize,
@@ -287,7 +298,7 @@ pub fn estimate_shared(
     threshold_w: f64,
 ) -> Option<(f32, f32)> {
     if let Some(shared) = shared.filter(|s| !s.known.is_empty()) {
-        if let Some(value) = pure_key(nodes, receiver, source, spread_cap).and_then(|k| shared.known.get(&k)) {
+        if let Some(value) = pure_key(nodes, paths, receiver, source, spread_cap).and_then(|k| shared.known.get(&k)) {
             shared.hits.fetch_add(1, Ordering::Relaxed);
             return *value;
         }

@@ -182,7 +182,7 @@ impl SolvedState {
             let (form_factor, spread) = (f32::from_bits(r.u32()?), f32::from_bits(r.u32()?));
             records.push(LinkRecord { receiver, source, form_factor, spread });
         }
-        if r.remaining() % NODE_BYTES != 0 {
+        if !r.remaining().is_multiple_of(NODE_BYTES) {
             return Err(r.damaged(format!("{} bytes of node exitance", r.remaining())));
         }
         let n = r.remaining() / NODE_BYTES;
