@@ -259,8 +259,15 @@ mod tests {
         assert_eq!(restored.to_records(), links.to_records());
         assert_eq!((restored_stats.sweeps, restored_stats.links_estimated), (7, 11));
 
-        let (mut other, _, _, _) = clusters::build(&procedural::room_with_objects(30)).unwrap();
-        let refused = state.restore(&mut other, &mut HierarchyStats::default()).unwrap_err();
-        assert!(refused.what.contains("nodes built"), "{refused}");
+        let refuse = |bad: SolvedState| {
+            let (mut other, _, _, _) = clusters::build(&scene).unwrap();
+            bad.restore(&mut other, &mut HierarchyStats::default()).unwrap_err().what
+        };
+        let other_build = SolvedState { build_nodes: state.build_nodes + 1, ..state.clone() };
+        assert!(refuse(other_build).contains("nodes built"));
+        let cluster_split = SolvedState { subdivided: vec![root], ..state.clone() };
+        assert!(refuse(cluster_split).contains(&format!("node {root} cannot be subdivided")));
+        let short = SolvedState { exitance: state.exitance[1..].to_vec(), ..state.clone() };
+        assert!(refuse(short).contains("exitance for"));
     }
 }
