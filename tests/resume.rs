@@ -2,7 +2,8 @@
 //! uninterrupted one, a damaged or stale checkpoint is ignored with a warning, and the parts of a
 //! sharded solve merge to the bytes of a single-machine solve, with every shard required once. The
 //! hierarchical method resumes the same way from its log of link estimates, and its shards hand their
-//! pass-one link estimates to a merge that ends with the bytes of a single-machine solve.
+//! link estimates and the solved state of the pass before to the next round and to a merge that ends
+//! with the bytes of a single-machine solve.
 
 mod common;
 
@@ -348,6 +349,9 @@ fn three_hierarchical_shards_of_the_cornell_box_merge_to_the_bytes_of_a_single_s
                 (RowsKind::HierarchyShardPart, k as u32, 3)
             );
             assert_eq!(written.pass, pass);
+            // Round two's parts name the solved state of pass one they refined from; shard 0's carries it.
+            assert_eq!(written.state.is_some(), pass == 2 && k == 0, "state in part {pass}.{k}");
+            assert_eq!(written.state_hash != 0, pass == 2, "state hash in part {pass}.{k}");
         }
     }
     // A third round has nothing left to shard.
@@ -370,8 +374,41 @@ fn three_hierarchical_shards_of_the_cornell_box_merge_to_the_bytes_of_a_single_s
     let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     let from_parts = stats["resume"]["rows_resumed"].as_u64().unwrap_or(0);
     let computed = stats["resume"]["rows_computed"].as_u64().unwrap_or(u64::MAX);
-    // Near links are the merge's own (measured: 1,037 of 429,728).
+    // Near links are the merge's own.
     assert!(computed.saturating_mul(20) < from_parts, "the merge computes under 5% of the estimates: {stats}");
+    // The last round's parts alone suffice: their state holds what round one solved.
+    let last: Vec<String> = (0..3).map(|k| part(2, k)).collect();
+    let alone = dir.path().join("alone.radsol").display().to_string();
+    let mut args = vec!["--method", "hierarchical", "--merge"];
+    args.extend(last.iter().map(String::as_str));
+    let out = radray(&preview_args(&alone, &args));
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::read(&alone).unwrap() == reference, "a merge of the last round alone differs");
+
+    // A part refined from another state (another run of round one), or a round whose state is
+    // missing, is refused, naming the part.
+    let refused = |parts: &[&str], expected: &str| {
+        let target = dir.path().join("refused.radsol").display().to_string();
+        let mut args = vec!["--method", "hierarchical", "--merge"];
+        args.extend_from_slice(parts);
+        let out = radray(&preview_args(&target, &args));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(expected), "{stderr}");
+        assert!(!Path::new(&target).exists(), "nothing written");
+    };
+    let (header, mut other) = part_file::read(Path::new(&part(2, 1))).unwrap();
+    other.state_hash ^= 1;
+    let stale = dir.path().join("stale.1").display().to_string();
+    part_file::write(Path::new(&stale), &header, &other).unwrap();
+    refused(&[&part(2, 0), &stale, &part(2, 2)], "stale.1: refined pass 2 from another solved state");
+    let (header, mut stateless) = part_file::read(Path::new(&part(2, 0))).unwrap();
+    stateless.state = None;
+    let cut = dir.path().join("cut.0").display().to_string();
+    part_file::write(Path::new(&cut), &header, &stateless).unwrap();
+    refused(&[&cut, &part(2, 1), &part(2, 2)], "no part of pass 2 holds the solved state");
+    // Parts of two rounds mixed: the last round given must be whole.
+    refused(&[&part(1, 0), &part(1, 1), &part(2, 2)], "shard(s) [0, 1] of 3 missing");
 
     // A part of another scene (the empty Cornell box) is refused, naming the file.
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_empty.toml").display().to_string();

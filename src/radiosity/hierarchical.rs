@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use super::fingerprint::Fnv1a64;
 use super::hierarchy::estimates::{EstimateHooks, EstimateLog};
-use super::hierarchy::part_file::HierarchyPart;
+use super::hierarchy::part_file::{self, HierarchyPart};
 use super::hierarchy::shards::SharedEstimates;
 use super::hierarchy::{
     self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyError, HierarchyParams, HierarchyProgress,
@@ -299,7 +299,10 @@ impl PassOneMethod for Hierarchical {
         // A merge (`--merge`): the whole solve, with the shards' estimates (`hierarchy::shards`).
         let shared = match resume.merge.is_empty() {
             true => None,
-            false => Some(SharedEstimates::for_merge(resume::merge_hierarchy_parts(&resume.merge, keys)?.1)),
+            false => {
+                let round = resume::merge_hierarchy_parts(&resume.merge, keys)?;
+                Some(SharedEstimates::for_merge(round.entries, round.state))
+            }
         };
         let load_seconds = load_start.elapsed().as_secs_f64();
         let mut checkpointer =
@@ -458,10 +461,11 @@ impl PassOneMethod for Hierarchical {
 
 impl Hierarchical {
     /// Shard `shard` of a hierarchical solve (`solve --shard K/N [--merge PARTS]`): with the parts of
-    /// passes 1..p (none for p = 0), runs those passes whole (taking their pure estimates from the
-    /// parts), refines pass p + 1 for the shard's receiver groups (`hierarchy::shards`) and writes
-    /// its pure link estimates to `output` as a part for the next round or `--merge`. A shard keeps
-    /// no checkpoint (an interrupted shard starts again).
+    /// round p (none for p = 0), starts from the solved state of pass p − 1 they carry, refines and
+    /// solves pass p whole (taking its pure estimates from the parts), refines pass p + 1 for the
+    /// shard's receiver groups (`hierarchy::shards`) and writes its pure link estimates, with the
+    /// state of pass p, to `output` as a part for the next round or `--merge`. A shard keeps no
+    /// checkpoint (an interrupted shard starts again).
     pub fn shard_part(
         &self,
         scene: &SceneDescription,
@@ -477,9 +481,12 @@ impl Hierarchical {
             fingerprint: scene_fingerprint(scene, &params, &textures),
             form_factor_key: link_key(scene, &params, &textures),
         };
-        let (done, earlier) = match resume.merge.is_empty() {
-            true => (0, Vec::new()),
-            false => resume::merge_hierarchy_parts(&resume.merge, keys)?,
+        let (done, earlier, from_state) = match resume.merge.is_empty() {
+            true => (0, Vec::new(), None),
+            false => {
+                let round = resume::merge_hierarchy_parts(&resume.merge, keys)?;
+                (round.pass, round.entries, round.state)
+            }
         };
         let pass = done + 1;
         if pass > params.refinement_passes {
@@ -487,7 +494,7 @@ impl Hierarchical {
         }
         let stage = progress.stage("hierarchy shard", 1, "passes");
         let start = Instant::now();
-        let shared = SharedEstimates::for_shard(shard.index, shard.count, pass, earlier);
+        let shared = SharedEstimates::for_shard(shard.index, shard.count, pass, earlier, from_state);
         let mut log = EstimateLog::default();
         let cancel = &resume.cancel;
         let stop = || cancel.is_requested();
@@ -511,7 +518,11 @@ impl Hierarchical {
                 other.map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?
             }
         };
-        let part = HierarchyPart { pass, entries: shared.take_recorded() };
+        // Every part names the state its pass was refined from; shard 0's carries it for the next round.
+        let state = shared.take_captured();
+        let state_hash = state.as_ref().map_or(0, |s| part_file::state_hash(&s.encode()));
+        let state = state.filter(|_| shard.index == 0);
+        let part = HierarchyPart { pass, entries: shared.take_recorded(), state_hash, state };
         resume::write_hierarchy_part(output, keys, shard, &part).map_err(resume::ShardError::from)?;
         stage.finish(&format!(
             "shard {}/{} of pass {pass}: {} links estimated ({} from the parts), {} of them shared",

@@ -12,6 +12,7 @@ use super::hierarchy::estimates::{EstimateLog, LoggedEstimate};
 use super::hierarchy::links_file;
 use super::hierarchy::part_file::{self, HierarchyPart};
 use super::hierarchy::shards::SharedEstimate;
+use super::hierarchy::solved_state::SolvedState;
 use super::matrix::rows_file::{self, RowsFileError, RowsHeader, RowsKind};
 use super::matrix::{FormFactors, PartialRows};
 use crate::interrupt::Cancel;
@@ -254,8 +255,10 @@ pub enum ShardError {
     ElementCounts,
     #[error("--merge needs at least one part")]
     NoParts,
-    #[error("the parts of refinement pass {pass} are missing (the parts go up to pass {passes}); run its shards with the parts of the passes before it")]
-    MissingPass { pass: u32, passes: u32 },
+    #[error("{}: refined pass {pass} from another solved state than {} (a part of another run of the round before); rerun it with the same parts", path.display(), first.display())]
+    OtherState { path: PathBuf, first: PathBuf, pass: u32 },
+    #[error("no part of pass {pass} holds the solved state its shards refined from (shard 0's part carries it); rerun shard 0")]
+    NoState { pass: u32 },
     #[error("the parts hold all {passes} refinement passes of this scene; merge them without --shard")]
     EveryPassDone { passes: u32 },
     #[error("--shard with --merge shards a later refinement pass of the hierarchical method; the matrix method shards in one round")]
@@ -341,24 +344,49 @@ pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, Sh
     PartialRows::union(&rows).ok_or(ShardError::ElementCounts)
 }
 
-/// The link estimates of a sharded hierarchical solve: the parts of passes 1..=P, each pass's
-/// checked like `merge_parts`'s rows (every part of this scene and settings, each shard once), and
-/// no pass missing below P. Returns P and all parts' entries in one list.
-pub fn merge_hierarchy_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<(u32, Vec<SharedEstimate>), ShardError> {
-    let mut parts = read_parts(paths, part_file::read)?;
-    let passes = parts.iter().map(|(_, _, part)| part.pass).max().ok_or(ShardError::NoParts)?;
-    let mut entries = Vec::new();
-    for pass in (1..=passes).rev() {
-        let (this, rest) = parts.into_iter().partition(|(_, _, part)| part.pass == pass);
-        parts = rest;
-        if Vec::is_empty(&this) {
-            return Err(ShardError::MissingPass { pass, passes });
+/// What a hierarchical shard or merge takes from the parts (`merge_hierarchy_parts`): the last round
+/// given, its parts' link estimates, and the solved state that round refined from.
+pub struct HierarchyRound {
+    /// The refinement pass of the last round.
+    pub pass: u32,
+    pub entries: Vec<SharedEstimate>,
+    /// The state of pass `pass` − 1 (`None` for pass 1, which starts from the emission).
+    pub state: Option<SolvedState>,
+}
+
+/// The parts of a sharded hierarchical solve: the last round given (the highest pass) must be
+/// complete, each part checked like `merge_parts`'s rows (this scene and settings, each shard once),
+/// and its parts must agree on the solved state they refined from, which one of them carries. Parts
+/// of earlier rounds are checked to be of this scene and otherwise not needed: the state holds what
+/// their rounds solved.
+pub fn merge_hierarchy_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<HierarchyRound, ShardError> {
+    let parts = read_parts(paths, part_file::read)?;
+    let pass = parts.iter().map(|(_, _, part)| part.pass).max().ok_or(ShardError::NoParts)?;
+    let (last, earlier): (Vec<_>, Vec<_>) = parts.into_iter().partition(|(_, _, part)| part.pass == pass);
+    for (path, header, _) in &earlier {
+        if header.kind != RowsKind::HierarchyShardPart {
+            return Err(ShardError::NotAPart { path: path.clone() });
         }
-        for (_, _, part) in checked_parts(this, keys, RowsKind::HierarchyShardPart)? {
-            entries.extend(part.entries);
+        if header.fingerprint != keys.fingerprint || header.form_factor_key != keys.form_factor_key {
+            let found = header.fingerprint;
+            return Err(ShardError::OtherScene { path: path.clone(), found, expected: keys.fingerprint });
         }
     }
-    Ok((passes, entries))
+    let last = checked_parts(last, keys, RowsKind::HierarchyShardPart)?;
+    let (first, _, first_part) = &last[0];
+    if let Some((path, _, _)) = last.iter().find(|(_, _, part)| part.state_hash != first_part.state_hash) {
+        return Err(ShardError::OtherState { path: path.clone(), first: first.clone(), pass });
+    }
+    let mut entries = Vec::with_capacity(last.iter().map(|(_, _, part)| part.entries.len()).sum());
+    let mut state = None;
+    for (_, _, part) in last {
+        entries.extend(part.entries);
+        state = state.or(part.state);
+    }
+    if pass > 1 && state.is_none() {
+        return Err(ShardError::NoState { pass });
+    }
+    Ok(HierarchyRound { pass, entries, state })
 }
 
 /// Writes shard `shard`'s pure link estimates of a hierarchical refinement pass as a part for

@@ -30,6 +30,7 @@ pub mod procedural;
 pub mod refine;
 pub mod shards;
 pub mod solve;
+pub mod solved_state;
 pub mod texels;
 pub mod tree_path;
 pub mod visibility;
@@ -67,6 +68,8 @@ pub enum HierarchyError {
     OverBudget { triangles: usize, needed_bytes: usize, budget_bytes: usize },
     #[error("stopped on request; the link estimates so far are in the solve's log")]
     Stopped,
+    #[error(transparent)]
+    State(#[from] solved_state::StateMismatch),
 }
 
 impl From<Stopped> for HierarchyError {
@@ -375,16 +378,32 @@ pub fn solve_logged(
         ..Default::default()
     };
     solve::reset_to_emission(&mut nodes, root);
+    let build_nodes = nodes.len();
     if let Some(shared) = hooks.shared {
         shared.assign_receivers(&nodes, root);
     }
     // A shard (`shards`) stops after refining its pass for its receivers.
     let shard_pass = hooks.shared.and_then(|s| s.shard_pass());
+    // A shard or merge of a later round starts from the state the round before handed on.
+    let mut first_pass = 1;
+    if let Some(state) = hooks.shared.and_then(|s| s.take_start()) {
+        links = state.restore(&mut nodes, &mut stats)?;
+        first_pass = state.pass + 1;
+    }
     match reuse {
         None => {
-            for pass in 1..=params.refinement_passes {
+            for pass in first_pass..=params.refinement_passes {
                 if let Some(shared) = hooks.shared {
                     shared.begin_pass(pass);
+                    if shard_pass == Some(pass) && pass > 1 {
+                        shared.capture(solved_state::SolvedState::capture(
+                            &nodes,
+                            build_nodes,
+                            &links,
+                            &stats,
+                            pass - 1,
+                        ));
+                    }
                 }
                 let (records, self_links) = if pass == 1 {
                     (Vec::new(), if nodes.is_cluster[root] { vec![root as u32] } else { Vec::new() })

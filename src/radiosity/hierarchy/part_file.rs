@@ -1,16 +1,20 @@
-//! A shard part of a hierarchical solve (`solve --shard K/N`): the refinement pass the shard refined
-//! and its pure link estimates (`shards`), in the row-block container (`matrix::rows_file`, kind
-//! `HierarchyShardPart`: same header, checksum and atomic write).
+//! A shard part of a hierarchical solve (`solve --shard K/N`): the refinement pass the shard refined,
+//! its pure link estimates (`shards`), and the solved state of the pass before it that the shard
+//! refined from (`solved_state`: shard 0 carries it, every part its hash), in the row-block container
+//! (`matrix::rows_file`, kind `HierarchyShardPart`: same header, checksum and atomic write).
 //!
 //! Payload, little-endian: pass u32, entries n u64, then per entry: receiver path and source path (each: root
 //! u32, depth u32, steps u128), spread cap f32, present u8 (0: the estimate was `None`), form factor
-//! f32, spread f32.
+//! f32, spread f32; then the state's hash u64 (FNV-1a 64 of its encoding; 0 in pass 1, which starts
+//! from the emission), present u8, and when present the state's encoding to the end.
 
 use std::path::Path;
 
 use super::links_file::{push_value, read_value};
 use super::shards::{EstimateKey, SharedEstimate};
+use super::solved_state::SolvedState;
 use super::tree_path::{TreePath, MAX_EXACT_DEPTH};
+use crate::radiosity::fingerprint::fnv1a64;
 use crate::radiosity::matrix::rows_file::{self, Payload, RowsFileError, RowsHeader, RowsKind};
 
 /// Bytes of one path and of one entry.
@@ -21,11 +25,19 @@ fn wrong_kind(path: &Path, found: RowsKind) -> RowsFileError {
     RowsFileError::WrongKind { path: path.to_path_buf(), found, expected: "hierarchical link estimates of a shard" }
 }
 
-/// What a part holds: the pass its shard refined (1-based) and its estimates.
+/// What a part holds: the pass its shard refined (1-based), its estimates, and the state of pass
+/// `pass` − 1 it refined from: its hash in every part (0 for pass 1), the state itself in one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HierarchyPart {
     pub pass: u32,
     pub entries: Vec<SharedEstimate>,
+    pub state_hash: u64,
+    pub state: Option<SolvedState>,
+}
+
+/// The hash a part gives the state it was refined from (see the module header).
+pub fn state_hash(encoded: &[u8]) -> u64 {
+    fnv1a64(encoded)
 }
 
 /// Writes `part` under `header` (whose kind must be `HierarchyShardPart`) to `path`, atomically.
@@ -49,6 +61,11 @@ pub fn write(path: &Path, header: &RowsHeader, part: &HierarchyPart) -> Result<(
             push_value(&mut bytes, *value);
             out.write_all(&bytes)?;
         }
+        out.write_all(&part.state_hash.to_le_bytes())?;
+        out.write_all(&[part.state.is_some() as u8])?;
+        if let Some(state) = &part.state {
+            out.write_all(&state.encode())?;
+        }
         Ok(())
     })
 }
@@ -71,7 +88,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, HierarchyPart), R
         return Err(r.damaged("pass 0".into()));
     }
     let n = r.u64()?;
-    if n.saturating_mul(ENTRY_BYTES as u64) != r.remaining() as u64 {
+    if n.saturating_mul(ENTRY_BYTES as u64) > r.remaining() as u64 {
         return Err(r.damaged(format!("{n} entries in {} bytes", r.remaining())));
     }
     let mut entries = Vec::with_capacity(n as usize);
@@ -82,8 +99,23 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, HierarchyPart), R
         let value = read_value(&mut r)?;
         entries.push((EstimateKey { receiver, source, spread_cap_bits }, value));
     }
+    let state_hash = r.u64()?;
+    let state = match r.u8()? {
+        0 => None,
+        1 => {
+            if self::state_hash(r.rest()) != state_hash {
+                return Err(r.damaged("a solved state that does not match its hash".into()));
+            }
+            let state = SolvedState::decode(&mut r)?;
+            if state.pass + 1 != pass {
+                return Err(r.damaged(format!("a part of pass {pass} with the solved state of pass {}", state.pass)));
+            }
+            Some(state)
+        }
+        p => return Err(r.damaged(format!("state flag {p}"))),
+    };
     r.finish()?;
-    Ok((header, HierarchyPart { pass, entries }))
+    Ok((header, HierarchyPart { pass, entries, state_hash, state }))
 }
 
 fn tree_path(r: &mut Payload) -> Result<TreePath, RowsFileError> {
@@ -99,6 +131,8 @@ fn tree_path(r: &mut Payload) -> Result<TreePath, RowsFileError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::radiosity::hierarchy::links::LinkRecord;
+    use glam::DVec3;
 
     fn sample() -> (RowsHeader, HierarchyPart) {
         let header = RowsHeader {
@@ -114,7 +148,24 @@ mod tests {
             (key(path(3, 0, 0), path(4, 2, 0b1110), 1.0), Some((0.25, 0.5))),
             (key(path(5, 64, u128::MAX), path(4, 0, 0), f32::INFINITY), None),
         ];
-        (header, HierarchyPart { pass: 2, entries })
+        let state = SolvedState {
+            pass: 1,
+            refinement_rounds: 3,
+            sweeps: 9,
+            converged: true,
+            budget_exceeded: false,
+            links_estimated: 40,
+            peak_bytes: 1 << 20,
+            error_after_pass_w: vec![0.5],
+            build_nodes: 5,
+            subdivided: vec![2],
+            links: vec![LinkRecord { receiver: 1, source: 8, form_factor: 0.25, spread: f32::INFINITY }],
+            exitance: vec![DVec3::new(1.0, 2.0, 3.0); 9],
+            gathered: vec![DVec3::ZERO; 9],
+            exitance_mean: vec![2.0; 9],
+        };
+        let state_hash = state_hash(&state.encode());
+        (header, HierarchyPart { pass: 2, entries, state_hash, state: Some(state) })
     }
 
     #[test]
@@ -127,5 +178,23 @@ mod tests {
         let bytes = std::fs::read(&path).unwrap();
         rows_file::assert_every_damage_refused(&bytes, |b| parse(&path, b).is_err());
         assert!(matches!(rows_file::parse(&path, &bytes), Err(RowsFileError::WrongKind { .. })));
+    }
+
+    /// A part whose state is not the pass before its own, or does not match its hash, is refused even
+    /// with a valid checksum (a part written by another run or version).
+    #[test]
+    fn a_state_of_another_pass_or_hash_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("part.0");
+        let (header, mut part) = sample();
+        part.pass = 3;
+        write(&path, &header, &part).unwrap();
+        let refused = read(&path).unwrap_err().to_string();
+        assert!(refused.contains("part of pass 3 with the solved state of pass 1"), "{refused}");
+        let (_, mut part) = sample();
+        part.state_hash ^= 1;
+        write(&path, &header, &part).unwrap();
+        let refused = read(&path).unwrap_err().to_string();
+        assert!(refused.contains("does not match its hash"), "{refused}");
     }
 }

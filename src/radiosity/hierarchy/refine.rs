@@ -13,6 +13,7 @@ use super::links::{
 };
 use super::nodes::{Nodes, NODE_BYTES};
 use super::shards::estimate_shared;
+use super::tree_path::{extend_paths, TreePath};
 use super::visibility::VisibilityContext;
 
 /// Settings of one refinement pass.
@@ -110,6 +111,8 @@ pub fn refine_logged(
     }
     let mut out = RefineOutcome { error_before_w: total_error(nodes, &work), ..Default::default() };
     let mut kept: Vec<LinkRecord> = Vec::with_capacity(work.len());
+    // A shard's or merge's tree paths of the nodes (the keys of shared estimates), kept up to date.
+    let mut paths: Vec<Option<TreePath>> = Vec::new();
     loop {
         let mut next: Vec<Pending> = Vec::new();
         // Pieces made by this round's splits get their texture means after the round (in parallel).
@@ -203,6 +206,9 @@ pub fn refine_logged(
         out.rounds += 1;
         on_round(out.rounds, kept.len(), nodes.len());
         out.estimated += next.len() as u64;
+        if hooks.shared.is_some() {
+            extend_paths(nodes, &mut paths);
+        }
         let estimates: Vec<Option<(f32, f32)>> = {
             let nodes: &Nodes = nodes;
             let pairs: Vec<(u32, u32)> = next.iter().map(|p| (p.receiver, p.source)).collect();
@@ -210,12 +216,12 @@ pub fn refine_logged(
             let compute = |i: usize| {
                 let p = &next[i];
                 let (r, s) = (p.receiver as usize, p.source as usize);
-                estimate_shared(shared, nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
+                estimate_shared(shared, &paths, nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
             };
             estimate_links(EstimateKind::Link, &pairs, &compute, hooks)?
         };
         if let Some(shared) = hooks.shared {
-            shared.record(nodes, next.iter().map(|p| (p.receiver, p.source, p.spread_cap)), &estimates);
+            shared.record(nodes, &paths, next.iter().map(|p| (p.receiver, p.source, p.spread_cap)), &estimates);
         }
         work = next
             .iter()

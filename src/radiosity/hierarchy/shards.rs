@@ -14,15 +14,24 @@
 //! merge is the whole solve, taking each pure estimate from the shards when they hold it and computing
 //! everything else (near links, later passes, what the budget or a near link made differ): its bytes
 //! are those of a single-machine solve by construction.
+//!
+//! Rounds hand on their solved state (`solved_state`): a shard of round p ≥ 2 starts from the state
+//! of pass p − 2 in round p − 1's parts (or from the emission for p = 2), refines pass p − 1 whole
+//! with round p − 1's estimates, sweeps it, and puts the resulting state of pass p − 1 in its own
+//! part beside its estimates of pass p. So each round, and the merge, does one pass's work for the
+//! whole hierarchy (loading, near links, decisions, sweeps) instead of every pass before it.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Mutex, OnceLock};
 
 use super::links::{estimate, is_near};
 use super::nodes::Nodes;
-use super::tree_path::{tree_path, TreePath};
+use super::solved_state::SolvedState;
+use super::tree_path::TreePath;
 use super::visibility::VisibilityContext;
+use crate::rng::splitmix64;
 
 /// A link estimate's identity: both ends' paths and the spread cap it inherited (`links::estimate`
 /// caps its spread there). Everything else it depends on is fixed by the scene and its settings.
@@ -35,6 +44,46 @@ pub struct EstimateKey {
 
 /// A pure estimate and its value ((form factor, spread), or `None`: the link was dropped).
 pub type SharedEstimate = (EstimateKey, Option<(f32, f32)>);
+
+/// Hashes the merge's estimate keys: each word folded in by a multiply and rotate (FxHash's step),
+/// finished by `splitmix64` so that every bit of the result depends on every word. Several times
+/// faster than the standard SipHash on these 52-byte keys, and the table holds a solve's own keys, so
+/// it needs no resistance to chosen collisions.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct KeyHasher(u64);
+
+impl KeyHasher {
+    fn fold(&mut self, word: u64) {
+        self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+impl Hasher for KeyHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.fold(u64::from_le_bytes(word));
+        }
+    }
+
+    fn write_u32(&mut self, v: u32) {
+        self.fold(v as u64);
+    }
+
+    fn write_u64(&mut self, v: u64) {
+        self.fold(v);
+    }
+
+    fn write_u128(&mut self, v: u128) {
+        self.fold(v as u64);
+        self.fold((v >> 64) as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        splitmix64(self.0)
+    }
+}
 
 /// Receivers grouped for sharding: a shard of N aims at about this many groups per shard, so that
 /// assigning whole groups keeps the shards balanced.
@@ -63,7 +112,11 @@ pub struct SharedEstimates {
     /// `SHARED`. Set by `assign_receivers`.
     owners: OnceLock<Vec<u32>>,
     /// A merge's estimates from the parts.
-    known: HashMap<EstimateKey, Option<(f32, f32)>>,
+    known: HashMap<EstimateKey, Option<(f32, f32)>, BuildHasherDefault<KeyHasher>>,
+    /// The solved state to start from (`solved_state`), taken by the solve.
+    start: Mutex<Option<SolvedState>>,
+    /// The state a shard of pass p ≥ 2 refined its pass from (that of pass p − 1).
+    captured: Mutex<Option<SolvedState>>,
     /// A shard's pure estimates so far.
     recorded: Mutex<Vec<SharedEstimate>>,
     /// Estimates a merge took from `known`.
@@ -71,19 +124,42 @@ pub struct SharedEstimates {
 }
 
 impl SharedEstimates {
-    /// Shard `index` of `count` of pass `pass`: refines its receivers' links in that pass and records
-    /// them, taking the estimates of the earlier passes' parts (`earlier`) where they fit.
-    pub fn for_shard(index: u32, count: u32, pass: u32, earlier: impl IntoIterator<Item = SharedEstimate>) -> Self {
-        SharedEstimates { shard: Some((index, count)), shard_pass: pass, ..SharedEstimates::for_merge(earlier) }
+    /// Shard `index` of `count` of pass `pass`: starts from `start` (the state of pass `pass` − 2, or
+    /// `None`: from the emission), refines its receivers' links in pass `pass` and records them,
+    /// taking the estimates of the last round's parts (`earlier`) where they fit.
+    pub fn for_shard(
+        index: u32,
+        count: u32,
+        pass: u32,
+        earlier: Vec<SharedEstimate>,
+        start: Option<SolvedState>,
+    ) -> Self {
+        SharedEstimates { shard: Some((index, count)), shard_pass: pass, ..SharedEstimates::for_merge(earlier, start) }
     }
 
-    /// A merge: the whole solve, taking the estimates of `parts` where they fit.
-    pub fn for_merge(parts: impl IntoIterator<Item = SharedEstimate>) -> Self {
-        let mut known = HashMap::new();
+    /// A merge: the whole solve from `start` (or from the emission), taking the estimates of `parts`
+    /// where they fit.
+    pub fn for_merge(parts: Vec<SharedEstimate>, start: Option<SolvedState>) -> Self {
+        let mut known = HashMap::with_capacity_and_hasher(parts.len(), BuildHasherDefault::default());
         for (key, value) in parts {
             known.entry(key).or_insert(value);
         }
-        SharedEstimates { known, ..Default::default() }
+        SharedEstimates { known, start: Mutex::new(start), ..Default::default() }
+    }
+
+    /// The state to start from, once (the solve takes it).
+    pub fn take_start(&self) -> Option<SolvedState> {
+        self.start.lock().unwrap_or_else(|e| e.into_inner()).take()
+    }
+
+    /// A shard keeps the state it refines its pass from.
+    pub fn capture(&self, state: SolvedState) {
+        *self.captured.lock().unwrap_or_else(|e| e.into_inner()) = Some(state);
+    }
+
+    /// The state a shard refined its pass from (`None` in pass 1).
+    pub fn take_captured(&self) -> Option<SolvedState> {
+        self.captured.lock().unwrap_or_else(|e| e.into_inner()).take()
     }
 
     /// The pass a shard refines for its receivers (and stops after); `None` for a merge.
@@ -174,35 +250,46 @@ impl SharedEstimates {
     }
 
     /// In its pass, a shard records the pure estimates among `links` (receiver, source, spread cap)
-    /// with their `values`.
-    pub fn record(&self, nodes: &Nodes, links: impl Iterator<Item = (u32, u32, f32)>, values: &[Option<(f32, f32)>]) {
+    /// with their `values`; `paths` are the nodes' tree paths (`tree_path::extend_paths`).
+    pub fn record(
+        &self,
+        nodes: &Nodes,
+        paths: &[Option<TreePath>],
+        links: impl Iterator<Item = (u32, u32, f32)>,
+        values: &[Option<(f32, f32)>],
+    ) {
         if !self.in_shard_pass() {
             return;
         }
         let new: Vec<SharedEstimate> = links
             .zip(values)
-            .filter_map(|((r, s, cap), &value)| pure_key(nodes, r as usize, s as usize, cap).map(|k| (k, value)))
+            .filter_map(|((r, s, cap), &value)| pure_key(nodes, paths, r as usize, s as usize, cap).map(|k| (k, value)))
             .collect();
         self.recorded.lock().unwrap_or_else(|e| e.into_inner()).extend(new);
     }
 }
 
 /// The key of link (receiver ← source) with spread cap `spread_cap` if its estimate is pure (not a
-/// near link, both ends' paths exact).
-pub fn pure_key(nodes: &Nodes, receiver: usize, source: usize, spread_cap: f32) -> Option<EstimateKey> {
+/// near link, both ends' paths exact); `paths` holds every node's `tree_path`.
+pub fn pure_key(
+    nodes: &Nodes,
+    paths: &[Option<TreePath>],
+    receiver: usize,
+    source: usize,
+    spread_cap: f32,
+) -> Option<EstimateKey> {
     if is_near(nodes, receiver, source) {
         return None;
     }
-    Some(EstimateKey {
-        receiver: tree_path(nodes, receiver)?,
-        source: tree_path(nodes, source)?,
-        spread_cap_bits: spread_cap.to_bits(),
-    })
+    Some(EstimateKey { receiver: paths[receiver]?, source: paths[source]?, spread_cap_bits: spread_cap.to_bits() })
 }
 
-/// `links::estimate` of link (receiver ← source), taken from a merge's parts when they hold it.
+/// `links::estimate` of link (receiver ← source), taken from a merge's parts when they hold it
+/// (`paths`: every node's `tree_path`, or empty without `shared`).
+#[allow(clippy::too_many_arguments)]
 pub fn estimate_shared(
     shared: Option<&SharedEstimates>,
+    paths: &[Option<TreePath>],
     nodes: &Nodes,
     ctx: &VisibilityContext,
     receiver: usize,
@@ -211,7 +298,7 @@ pub fn estimate_shared(
     threshold_w: f64,
 ) -> Option<(f32, f32)> {
     if let Some(shared) = shared.filter(|s| !s.known.is_empty()) {
-        if let Some(value) = pure_key(nodes, receiver, source, spread_cap).and_then(|k| shared.known.get(&k)) {
+        if let Some(value) = pure_key(nodes, paths, receiver, source, spread_cap).and_then(|k| shared.known.get(&k)) {
             shared.hits.fetch_add(1, Ordering::Relaxed);
             return *value;
         }
@@ -229,10 +316,10 @@ mod tests {
     #[test]
     fn every_receiver_belongs_to_one_shard_or_to_all() {
         let (nodes, root, _, _) = clusters::build(&procedural::room_with_objects(400)).unwrap();
-        assert!(SharedEstimates::for_merge(Vec::new()).refines_receiver(&nodes, root as usize));
+        assert!(SharedEstimates::for_merge(Vec::new(), None).refines_receiver(&nodes, root as usize));
         for count in 1..6u32 {
             let shards: Vec<SharedEstimates> =
-                (0..count).map(|k| SharedEstimates::for_shard(k, count, 1, Vec::new())).collect();
+                (0..count).map(|k| SharedEstimates::for_shard(k, count, 1, Vec::new(), None)).collect();
             shards.iter().for_each(|s| {
                 s.assign_receivers(&nodes, root as usize);
                 s.begin_pass(1);

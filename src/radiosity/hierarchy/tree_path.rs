@@ -33,6 +33,26 @@ pub fn tree_path(nodes: &Nodes, node: usize) -> Option<TreePath> {
     Some(TreePath { root: at as u32, depth, steps })
 }
 
+/// Extends `paths` (the `tree_path` of nodes 0..paths.len()) to every node of `nodes`, each from its
+/// parent's path in O(1): a piece's steps are its own slot, then its parent's steps two bits up.
+/// Refinement only appends nodes, with parents before children, so one call per round keeps it whole.
+pub fn extend_paths(nodes: &Nodes, paths: &mut Vec<Option<TreePath>>) {
+    for node in paths.len()..nodes.len() {
+        let path = if nodes.level[node] == 0 {
+            Some(TreePath { root: node as u32, depth: 0, steps: 0 })
+        } else {
+            let parent = nodes.parent[node] as usize;
+            let slot = (node - nodes.first_child[parent] as usize) as u128;
+            paths[parent].filter(|p| p.depth < MAX_EXACT_DEPTH).map(|p| TreePath {
+                root: p.root,
+                depth: p.depth + 1,
+                steps: slot | (p.steps << 2),
+            })
+        };
+        paths.push(path);
+    }
+}
+
 /// A 64-bit hash of `node`'s path (any depth): equal paths give equal hashes, whatever the order in
 /// which the nodes were subdivided.
 pub fn path_hash(nodes: &Nodes, node: usize) -> u64 {
@@ -76,5 +96,11 @@ mod tests {
         }
         assert_eq!(tree_path(&a, a2 + 1), Some(TreePath { root: 1, depth: 2, steps: 1 | (3 << 2) }));
         assert_ne!(path_hash(&a, a0 + 1), path_hash(&a, a0 + 2));
+        let mut paths = Vec::new();
+        extend_paths(&a, &mut paths);
+        assert!((0..a.len()).all(|n| paths[n] == tree_path(&a, n)), "extend_paths agrees with tree_path");
+        a.subdivide(a2 + 1);
+        extend_paths(&a, &mut paths);
+        assert!((0..a.len()).all(|n| paths[n] == tree_path(&a, n)), "and after a later subdivision");
     }
 }

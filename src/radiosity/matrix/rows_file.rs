@@ -296,6 +296,16 @@ pub struct Payload<'a> {
 }
 
 impl<'a> Payload<'a> {
+    /// A cursor over `bytes` from their start; `path` names them in errors.
+    pub fn over(path: &'a Path, bytes: &'a [u8]) -> Self {
+        Payload { path, bytes, at: 0 }
+    }
+
+    /// The bytes not read yet, without reading them.
+    pub fn rest(&self) -> &'a [u8] {
+        &self.bytes[self.at..]
+    }
+
     /// An error naming the file and the current offset.
     pub fn damaged(&self, what: String) -> RowsFileError {
         RowsFileError::Damaged { path: self.path.to_path_buf(), offset: self.at, what }
