@@ -173,6 +173,7 @@ pub fn for_scene(scene: &SceneDescription) -> Box<dyn PassOneMethod> {
         MethodChoice::Matrix => false,
         MethodChoice::Hierarchical => true,
         MethodChoice::Auto => auto_prefers_hierarchy(scene).is_some(),
+        MethodChoice::Adaptive => return Box::new(super::adaptive::Adaptive { solver: scene.radiosity.solver }),
     };
     if hierarchical {
         Box::new(Hierarchical)
