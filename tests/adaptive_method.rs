@@ -39,6 +39,20 @@ fn floor_mesh(edge: f32) -> Mesh {
     Mesh::build(&scene, edge)
 }
 
+/// The furnace solved adaptively, one level, with a threshold so low that hemicube noise alone
+/// splits elements: the scene, the refined mesh and its solution.
+fn refined_furnace() -> (SceneDescription, Mesh, std::sync::Arc<radray::radiosity::Solution>) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/furnace.toml");
+    let mut scene = scene::load(&path).unwrap();
+    scene.radiosity.method = MethodChoice::Adaptive;
+    scene.radiosity.adaptive.levels = 1;
+    scene.radiosity.adaptive.threshold = 1e-6;
+    let mut stats = RunStats::default();
+    let (mesh, solution) =
+        run::pass_one(&scene, None, &RunPhotons::default(), &Progress::hidden(), &mut stats).unwrap();
+    (scene, mesh, solution)
+}
+
 /// The furnace (scenes/furnace.toml: closed unit cube, Kd 0.5, Ke 1) has B = E/(1 − ρ) = 2π
 /// everywhere. Solved adaptively with a threshold so low that hemicube noise alone splits elements,
 /// every element and every vertex (hanging ones included) stays within the 1%.
@@ -139,4 +153,19 @@ fn a_hanging_vertex_takes_its_edges_interpolated_value() {
         });
         assert!(on_unsplit_edge, "hanging vertex at {p} lies inside an element edge");
     }
+}
+
+/// Refinement decisions are serial and every level's form factors are row-independent, so the
+/// refined mesh and its solution are the same bits on one thread and on two.
+#[test]
+fn the_refined_solution_is_the_same_at_any_thread_count() {
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(refined_furnace)
+    };
+    let ((_, mesh_1, solution_1), (_, mesh_2, solution_2)) = (on(1), on(2));
+    assert_eq!(mesh_1.positions, mesh_2.positions);
+    assert_eq!(mesh_1.elements.corners, mesh_2.elements.corners);
+    assert_eq!(solution_1.element_exitance, solution_2.element_exitance);
+    assert_eq!(solution_1.vertex_exitance, solution_2.vertex_exitance);
 }
