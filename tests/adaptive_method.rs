@@ -58,14 +58,7 @@ fn refined_furnace() -> (SceneDescription, Mesh, std::sync::Arc<radray::radiosit
 /// every element and every vertex (hanging ones included) stays within the 1%.
 #[test]
 fn furnace_stays_exact_within_one_percent_when_refined() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/furnace.toml");
-    let mut scene = scene::load(&path).unwrap();
-    scene.radiosity.method = MethodChoice::Adaptive;
-    scene.radiosity.adaptive.levels = 1;
-    scene.radiosity.adaptive.threshold = 1e-6;
-    let mut stats = RunStats::default();
-    let (mesh, solution) =
-        run::pass_one(&scene, None, &RunPhotons::default(), &Progress::hidden(), &mut stats).unwrap();
+    let (scene, mesh, solution) = refined_furnace();
     let uniform = radray::mesh::count_elements(&scene, scene.radiosity.max_element_edge) as usize;
     assert!(mesh.elements.len() > uniform, "the low threshold split elements: {} of {uniform}", mesh.elements.len());
     let exact = 2.0 * std::f32::consts::PI;

@@ -17,8 +17,8 @@ use std::time::Instant;
 
 use super::matrix::{form_factors, RowPlan};
 use super::method::{
-    available_memory_bytes, form_factor_bytes_bound, specular_accel, specular_paths, MethodError, PassOne,
-    PassOneMethod, Reuse,
+    check_matrix_fits, form_factor_bytes_bound, specular_accel, specular_paths, MethodError, PassOne, PassOneMethod,
+    Reuse,
 };
 use super::solution::Solution;
 use super::solver;
@@ -73,24 +73,6 @@ impl Adaptive {
         mesh
     }
 
-    /// Refuses a mesh whose matrix could not fit (as `FullMatrix::check_memory`).
-    fn check_level_memory(&self, scene: &SceneDescription, mesh: &Mesh) -> Result<(), MethodError> {
-        let bound = form_factor_bytes_bound(mesh, &scene.radiosity);
-        if let Some(available) = available_memory_bytes() {
-            if bound / 2 > available {
-                const GIB: f64 = (1u64 << 30) as f64;
-                return Err(MethodError::OutOfMemory {
-                    scene: scene.path.display().to_string(),
-                    elements: mesh.elements.len(),
-                    resolution: scene.radiosity.hemicube_resolution_px,
-                    needed_gib: bound as f64 / 2.0 / GIB,
-                    available_gib: available as f64 / GIB,
-                });
-            }
-        }
-        Ok(())
-    }
-
     /// Hemicube form factors of `mesh` (through mirrors and glass when `photons` is given) and the
     /// solve, with conforming values at the hanging vertices.
     #[allow(clippy::too_many_arguments)]
@@ -105,7 +87,7 @@ impl Adaptive {
         progress: &Progress,
         stats: &mut PassOneStats,
     ) -> Result<Level, MethodError> {
-        self.check_level_memory(scene, &mesh)?;
+        check_matrix_fits(scene, &mesh, form_factor_bytes_bound(&mesh, &scene.radiosity))?;
         let mut params = self.params(scene);
         if !last {
             // Levels that only decide where to split see the scene at half the hemicube resolution.
