@@ -164,7 +164,7 @@ pub struct AdaptiveSettings {
 
 impl Default for AdaptiveSettings {
     fn default() -> Self {
-        AdaptiveSettings { levels: 2, threshold: 0.1 }
+        AdaptiveSettings { levels: 1, threshold: 0.1 }
     }
 }
 
