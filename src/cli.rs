@@ -71,6 +71,7 @@ pub enum MethodArg {
     Auto,
     Matrix,
     Hierarchical,
+    Adaptive,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -270,6 +271,7 @@ impl From<MethodArg> for MethodChoice {
             MethodArg::Auto => MethodChoice::Auto,
             MethodArg::Matrix => MethodChoice::Matrix,
             MethodArg::Hierarchical => MethodChoice::Hierarchical,
+            MethodArg::Adaptive => MethodChoice::Adaptive,
         }
     }
 }

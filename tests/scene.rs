@@ -166,6 +166,22 @@ fn impossible_image_sizes_are_refused() {
     assert!(msg.contains("scene.toml:8:") && msg.contains("adaptive_budget"), "{msg}");
 }
 
+/// The adaptive mesh's keys are read, and out-of-range values are refused with file:line.
+#[test]
+fn adaptive_mesh_keys_are_read_and_checked() {
+    let text = format!(
+        "{CAMERA}\n[radiosity]\nmethod = \"adaptive\"\nadaptive_levels = 3\nadaptive_threshold = 0.2\n{LIGHT_AND_QUAD}"
+    );
+    let (_dir, ok) = parse_files(&[("scene.toml", &text)]);
+    let ok = ok.unwrap();
+    assert_eq!(ok.radiosity.method, radray::scene::MethodChoice::Adaptive);
+    assert_eq!((ok.radiosity.adaptive.levels, ok.radiosity.adaptive.threshold), (3, 0.2));
+    let msg = error_of(&format!("{CAMERA}\n[radiosity]\nadaptive_threshold = 0.0\n{LIGHT_AND_QUAD}"));
+    assert!(msg.contains("scene.toml:8:") && msg.contains("adaptive_threshold"), "{msg}");
+    let msg = error_of(&format!("{CAMERA}\n[radiosity]\nadaptive_levels = 9\n{LIGHT_AND_QUAD}"));
+    assert!(msg.contains("scene.toml:8:") && msg.contains("adaptive_levels"), "{msg}");
+}
+
 #[test]
 fn malformed_obj_names_file_and_line() {
     let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n";

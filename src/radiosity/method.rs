@@ -176,6 +176,7 @@ pub fn for_scene(scene: &SceneDescription) -> Box<dyn PassOneMethod> {
         MethodChoice::Matrix => false,
         MethodChoice::Hierarchical => true,
         MethodChoice::Auto => auto_prefers_hierarchy(scene).is_some(),
+        MethodChoice::Adaptive => return Box::new(super::adaptive::Adaptive { solver: scene.radiosity.solver }),
     };
     if hierarchical {
         Box::new(Hierarchical)
@@ -246,6 +247,24 @@ pub fn form_factor_bytes_bound(mesh: &Mesh, params: &RadiosityParams) -> u64 {
         .filter(|&i| mesh.elements.reflectance[i].max_element() > 0.0 || mesh.elements.emission[i].max_element() > 0.0)
         .count() as u64;
     rows * n.min(pixels) * 8
+}
+
+/// Refuses a matrix of `mesh` whose bound (`form_factor_bytes_bound`, pessimistic by about 2×, hence
+/// halved) exceeds the memory available.
+pub fn check_matrix_fits(scene: &SceneDescription, mesh: &Mesh, bound: u64) -> Result<(), MethodError> {
+    if let Some(available) = available_memory_bytes() {
+        if bound / 2 > available {
+            const GIB: f64 = (1u64 << 30) as f64;
+            return Err(MethodError::OutOfMemory {
+                scene: scene.path.display().to_string(),
+                elements: mesh.elements.len(),
+                resolution: scene.radiosity.hemicube_resolution_px,
+                needed_gib: bound as f64 / 2.0 / GIB,
+                available_gib: available as f64 / GIB,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Memory the system says is available (Linux `MemAvailable`), if known.
@@ -457,19 +476,7 @@ impl PassOneMethod for FullMatrix {
         if self.solver == SolverKind::Progressive {
             bound *= 2;
         }
-        if let Some(available) = available_memory_bytes() {
-            if bound / 2 > available {
-                const GIB: f64 = (1u64 << 30) as f64;
-                return Err(MethodError::OutOfMemory {
-                    scene: scene.path.display().to_string(),
-                    elements: mesh.elements.len(),
-                    resolution: scene.radiosity.hemicube_resolution_px,
-                    needed_gib: bound as f64 / 2.0 / GIB,
-                    available_gib: available as f64 / GIB,
-                });
-            }
-        }
-        Ok(())
+        check_matrix_fits(scene, mesh, bound)
     }
 
     fn solve(

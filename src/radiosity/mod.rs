@@ -5,6 +5,7 @@
 //! subdivided elements (`hierarchical`, on the mesh of its leaves: `leaf_mesh`). The result is the immutable `Solution` that
 //! pass two reads.
 
+pub mod adaptive;
 pub mod fingerprint;
 pub mod hemicube;
 pub mod hierarchical;

@@ -146,6 +146,26 @@ pub struct RadiosityParams {
     pub method: MethodChoice,
     /// Settings of the hierarchical method (`memory`, `error_threshold`, `min_element_size`, …).
     pub hierarchy: HierarchySettings,
+    /// Settings of the adaptive-mesh method (`adaptive_levels`, `adaptive_threshold`).
+    pub adaptive: AdaptiveSettings,
+}
+
+/// The scene-level settings of `method = "adaptive"` (`radiosity::adaptive`): the uniform matrix on
+/// patches of `max_element_edge`, then up to `levels` rounds that split the elements whose solution
+/// varies across them by more than `threshold` of their own exitance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AdaptiveSettings {
+    /// Rounds of subdivision after the patch solve (`adaptive_levels`); each halves an element's edges.
+    pub levels: u32,
+    /// Split when an element's corner exitance differs from its own by more than this fraction of its
+    /// own exitance, or of a floor relative to the brightest reflected exitance (`adaptive_threshold`).
+    pub threshold: f64,
+}
+
+impl Default for AdaptiveSettings {
+    fn default() -> Self {
+        AdaptiveSettings { levels: 1, threshold: 0.1 }
+    }
 }
 
 /// Which pass-one method solves the scene (`[radiosity] method`).
@@ -161,6 +181,8 @@ pub enum MethodChoice {
     Matrix,
     /// Hierarchical radiosity with clustering and adaptive subdivision.
     Hierarchical,
+    /// The full matrix on a mesh subdivided where its solution varies (`radiosity::adaptive`).
+    Adaptive,
 }
 
 /// Predicted CPU seconds of the full matrix's hemicubes (`radiosity::matrix::cost`) above which
@@ -249,6 +271,7 @@ impl Default for RadiosityParams {
             seed: 0,
             method: MethodChoice::Auto,
             hierarchy: HierarchySettings::default(),
+            adaptive: AdaptiveSettings::default(),
         }
     }
 }

@@ -96,6 +96,8 @@ struct RawRadiosity {
     min_element_size: Option<S<f32>>,
     visibility_rays: Option<S<i64>>,
     refinement_passes: Option<S<i64>>,
+    adaptive_levels: Option<S<i64>>,
+    adaptive_threshold: Option<S<f64>>,
 }
 
 /// `memory = 8000000000` or `memory = "8GB"`.
@@ -561,6 +563,11 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
     }
     if r.refinement_passes.is_some() {
         h.refinement_passes = Some(loc.positive_int(&r.refinement_passes, "refinement_passes", 1, 32, 0)?);
+    }
+    let a = &mut p.adaptive;
+    a.levels = loc.positive_int(&r.adaptive_levels, "adaptive_levels", 0, 6, a.levels)?;
+    if let Some(t) = loc.ranged(&r.adaptive_threshold, "adaptive_threshold", |x| x > 0.0 && x <= 1.0, "in (0, 1]")? {
+        a.threshold = t;
     }
     Ok(())
 }

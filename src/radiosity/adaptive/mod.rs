@@ -1,0 +1,212 @@
+//! `method = "adaptive"`: the full matrix on a mesh refined where the solution needs it (Cohen,
+//! Greenberg, Immel and Brock 1986; Ashdown, *Radiosity: A Programmer's Perspective*, ch. 7). The
+//! scene is meshed into patches of `ADAPTIVE_PATCH_FACTOR × max_element_edge` and solved with
+//! hemicubes and the scene's solver; elements whose solution varies across them (`criterion`) are
+//! split into four (`subdivide`); the finer mesh is solved again, up to `adaptive_levels` times. A
+//! hanging vertex takes its edge's interpolated value (`hanging`), so the image has no T-vertex
+//! cracks. Every level is a plain `FullMatrix`-style solve, so the bytes are the same at any thread
+//! count; light through mirrors and glass (extended form factors, photons) is followed on the final
+//! mesh only, the levels before it are plain.
+
+pub mod criterion;
+pub mod hanging;
+pub mod subdivide;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::matrix::{form_factors, RowPlan};
+use super::method::{
+    check_matrix_fits, form_factor_bytes_bound, specular_accel, specular_paths, MethodError, PassOne, PassOneMethod,
+    Reuse,
+};
+use super::solution::Solution;
+use super::solver;
+use super::stats::PassOneStats;
+use crate::mesh::Mesh;
+use crate::progress::Progress;
+use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
+use crate::transport::photons::RunPhotons;
+use subdivide::EdgeMidpoints;
+
+/// Hemicube resolution the deciding levels never go below.
+const MIN_PROBE_RESOLUTION_PX: u32 = 32;
+
+/// The adaptive-mesh method (see module docs) with the scene's solver.
+#[derive(Clone, Copy, Debug)]
+pub struct Adaptive {
+    pub solver: SolverKind,
+}
+
+/// The solved mesh of one level, with what it cost.
+struct Level {
+    mesh: Mesh,
+    solution: Solution,
+}
+
+/// Elements no refinement may split: both sides of two-sided surfaces (the back side mirrors the
+/// front's grid) and elements buried under the back of a one-sided surface (never seen).
+fn splittable(mesh: &Mesh) -> Vec<bool> {
+    let mut sides = vec![0u8; mesh.surface_source.iter().map(|&s| s as usize + 1).max().unwrap_or(0)];
+    for &source in &mesh.surface_source {
+        sides[source as usize] = sides[source as usize].saturating_add(1);
+    }
+    (0..mesh.elements.len())
+        .map(|e| {
+            let source = mesh.surface_source[mesh.elements.surface[e] as usize] as usize;
+            sides[source] < 2 && !mesh.element_buried.get(e).copied().unwrap_or(false)
+        })
+        .collect()
+}
+
+impl Adaptive {
+    fn params(&self, scene: &SceneDescription) -> RadiosityParams {
+        RadiosityParams { solver: self.solver, ..scene.radiosity.clone() }
+    }
+
+    /// The patch mesh: the scene's uniform mesh at `ADAPTIVE_PATCH_FACTOR × max_element_edge`, with
+    /// `textures`, and its buried elements marked.
+    fn patch_mesh(scene: &SceneDescription, textures: Arc<crate::material::SceneTextures>) -> Mesh {
+        let edge = scene.radiosity.max_element_edge;
+        let mut mesh = Mesh::build_with_textures(scene, edge, textures);
+        mesh.element_buried = crate::burial::buried_elements(&mesh);
+        mesh
+    }
+
+    /// Hemicube form factors of `mesh` (through mirrors and glass when `photons` is given) and the
+    /// solve, with conforming values at the hanging vertices.
+    #[allow(clippy::too_many_arguments)]
+    fn solve_level(
+        &self,
+        scene: &SceneDescription,
+        mesh: Mesh,
+        midpoints: &EdgeMidpoints,
+        photons: Option<&RunPhotons>,
+        level: u32,
+        last: bool,
+        progress: &Progress,
+        stats: &mut PassOneStats,
+    ) -> Result<Level, MethodError> {
+        check_matrix_fits(scene, &mesh, form_factor_bytes_bound(&mesh, &scene.radiosity))?;
+        let mut params = self.params(scene);
+        if !last {
+            // Levels that only decide where to split see the scene at half the hemicube resolution.
+            params.hemicube_resolution_px = (params.hemicube_resolution_px / 2).max(MIN_PROBE_RESOLUTION_PX);
+        }
+        let stage =
+            progress.stage(&format!("form factors (adaptive level {level})"), mesh.elements.len() as u64, "elements");
+        let start = Instant::now();
+        let accel = photons.and_then(|_| specular_accel(scene, &mesh));
+        let paths = match (&accel, photons) {
+            (Some(accel), Some(photons)) => Some(specular_paths(scene, &mesh, accel, photons)),
+            _ => None,
+        };
+        let rows = form_factors::compute_planned(&mesh, &params, paths.as_ref(), RowPlan::all(), &|| stage.inc(1));
+        let ff = rows.ff;
+        let seconds = start.elapsed().as_secs_f64();
+        stage.finish(&format!(
+            "level {level}: {} elements, {} non-zeros ({:.1} MiB)",
+            mesh.elements.len(),
+            ff.nnz(),
+            ff.memory_bytes() as f64 / (1 << 20) as f64
+        ));
+        stats.form_factor_seconds += seconds;
+        stats.form_factor_nonzeros = ff.nnz();
+        stats.form_factor_bytes = stats.form_factor_bytes.max(ff.memory_bytes());
+        stats.specular_pixels = rows.specular.pixels;
+        stats.specular_rays = rows.specular.rays;
+        stats.extended_nonzeros = rows.specular.entries;
+        let start = Instant::now();
+        let mut solution = solver::solve_solution(&mesh, &scene.materials, &ff, &params, &mut |_, _| {});
+        stats.solve_seconds += start.elapsed().as_secs_f64();
+        stats.sweeps += solution.stats.iterations;
+        stats.final_residual = solution.stats.residual_history.last().copied().unwrap_or(0.0);
+        let hanging = hanging::hanging_vertices(&mesh, midpoints);
+        hanging::conform(&mut solution.vertex_exitance, &hanging);
+        hanging::conform(&mut solution.vertex_direct_exitance, &hanging);
+        Ok(Level { mesh, solution })
+    }
+}
+
+impl PassOneMethod for Adaptive {
+    fn name(&self) -> String {
+        format!("adaptive ({})", self.solver.name())
+    }
+
+    /// The mesh is the method's own (patches refined by the solution), not the scene's uniform one.
+    fn uses_uniform_mesh(&self) -> bool {
+        false
+    }
+
+    /// The patch mesh's key (geometry, materials, hemicube and solver settings) with the refinement's
+    /// settings: equal keys refine and solve alike.
+    fn solution_key(&self, scene: &SceneDescription, mesh: &Mesh) -> u64 {
+        let patches = Mesh::build_with_textures(scene, scene.radiosity.max_element_edge, mesh.textures.clone());
+        let a = &scene.radiosity.adaptive;
+        let min_edge = scene.radiosity.hierarchy.min_element_size.unwrap_or(scene.diagonal() / 200.0);
+        let mut h = super::fingerprint::solution_key(&patches, &scene.materials, &self.params(scene));
+        for x in
+            [a.levels as u64, a.threshold.to_bits(), min_edge.to_bits() as u64, u64::from(criterion::FLOOR.to_bits())]
+        {
+            h = (h ^ x).wrapping_mul(0x100000001b3);
+        }
+        h
+    }
+
+    /// Checked per level, on the mesh about to be solved.
+    fn check_memory(&self, _scene: &SceneDescription, _mesh: &Mesh) -> Result<(), MethodError> {
+        Ok(())
+    }
+
+    fn solve(
+        &self,
+        scene: &SceneDescription,
+        mesh: Mesh,
+        _reuse: &mut Reuse,
+        photons: &RunPhotons,
+        progress: &Progress,
+    ) -> Result<PassOne, MethodError> {
+        let settings = &scene.radiosity.adaptive;
+        let mut stats =
+            PassOneStats { hemicube_resolution_px: scene.radiosity.hemicube_resolution_px, ..Default::default() };
+        let mut current = Self::patch_mesh(scene, mesh.textures.clone());
+        let specular = crate::radiosity::specular::mesh_has_specular(&current, &scene.materials);
+        let min_edge = scene.radiosity.hierarchy.min_element_size.unwrap_or(scene.diagonal() / 200.0);
+        let mut midpoints = EdgeMidpoints::default();
+        let mut level = 0;
+        let solved = loop {
+            let last = level == settings.levels;
+            let with_photons = (last && specular).then_some(photons);
+            let solved =
+                self.solve_level(scene, current, &midpoints, with_photons, level, last, progress, &mut stats)?;
+            if last {
+                break solved;
+            }
+            let e = &solved.solution;
+            let split = criterion::elements_to_split(
+                &solved.mesh,
+                &e.element_exitance,
+                &e.vertex_exitance,
+                settings.threshold,
+                criterion::FLOOR,
+                min_edge,
+                &splittable(&solved.mesh),
+            );
+            let count = split.iter().filter(|&&s| s).count();
+            let over_limit = solved.mesh.elements.len() as u64 + 3 * count as u64 > crate::run::MAX_ELEMENTS;
+            if count == 0 || over_limit {
+                // That level was solved only to decide where to split (plain, at half resolution):
+                // solve the final mesh once more, in full, with its paths through mirrors and glass.
+                let photons = specular.then_some(photons);
+                break self.solve_level(scene, solved.mesh, &midpoints, photons, level, true, progress, &mut stats)?;
+            }
+            current = subdivide::split(&solved.mesh, &split, &mut midpoints);
+            current.element_buried = crate::burial::buried_elements(&current);
+            level += 1;
+        };
+        stats.elements = solved.mesh.elements.len();
+        stats.solver = Some(self.name());
+        stats.hemicubes_per_second = stats.elements as f64 / stats.form_factor_seconds.max(1e-9);
+        Ok(PassOne { mesh: solved.mesh, solution: solved.solution, stats, reused_form_factors: false })
+    }
+}
