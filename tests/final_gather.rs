@@ -15,7 +15,7 @@ use radray::progress::Progress;
 use radray::run::{self, RunStats};
 use radray::scene::{Camera, DirectMode, FinalGatherMode, Material, RenderParams, SceneDescription, Surface};
 use radray::trace::camera::PinholeCamera;
-use radray::trace::gather::{fill, Strata};
+use radray::trace::gather::{adaptive_gather_rays, fill, FinalGather, Strata};
 use radray::trace::{RayCounts, TraceMode, Tracer};
 use radray::transport::photons::RunPhotons;
 
@@ -176,6 +176,46 @@ fn gather_converges_to_a_bright_ceilings_form_factor() {
             (0..seeds).map(|s| gathered(&tracer, vec3(0.5, 0.0, 0.5), Vec3::Y, rays, s).x).sum::<f32>() / seeds as f32;
         let bound = 4.0 * sigma / (seeds as f32).sqrt();
         assert!((mean - exact).abs() <= bound, "{rays} rays: {mean} against {exact} (bound {bound})");
+    }
+}
+
+#[test]
+fn adaptive_samples_gather_a_quarter_of_the_rays_and_stay_unbiased() {
+    // The bright ceiling of the previous test, gathered through `FinalGather` without a cache (every
+    // call gathers): a base sample's gather spends `gather_rays`, an adaptive sample's
+    // `adaptive_gather_rays`, and both means over K pixels stay within the previous test's bound of
+    // the exact form factor for their own strata (the estimator is unbiased at any M × N).
+    let materials = vec![Material::diffuse("wall", Vec3::splat(0.5)), Material::diffuse("ceiling", Vec3::splat(0.5))];
+    let setup = Setup::hand_made(&scene(materials, cube_faces(0, 1)), 0.1, |mesh| {
+        let b = (0..mesh.elements.len())
+            .map(|e| if mesh.elements.material[e] == 1 { Vec3::ONE } else { Vec3::ZERO })
+            .collect::<Vec<_>>();
+        (b, vec![Vec3::ZERO; mesh.elements.len()])
+    });
+    let tracer = setup.tracer_with(&one_bounce());
+    let gather_rays = 1024;
+    let final_gather = FinalGather {
+        strata: Strata::for_rays(gather_rays),
+        adaptive_strata: Strata::for_rays(adaptive_gather_rays(gather_rays)),
+        cache: None,
+    };
+    assert_eq!(adaptive_gather_rays(gather_rays), 256);
+    let exact = 4.0 * corner_form_factor(0.5, 0.5, 1.0);
+    let pixels = 8u64;
+    for (adaptive, strata) in [(false, final_gather.strata), (true, final_gather.adaptive_strata)] {
+        let mut counts = RayCounts::default();
+        let mean = (0..pixels)
+            .map(|i| {
+                let mut sampler = if adaptive { Sampler::pixel_adaptive(3, i) } else { Sampler::pixel(3, i) };
+                assert_eq!(sampler.is_adaptive(), adaptive);
+                final_gather.irradiance(&tracer, vec3(0.5, 0.0, 0.5), Vec3::Y, &mut sampler, &mut counts).x
+            })
+            .sum::<f32>()
+            / pixels as f32;
+        assert_eq!(counts.secondary, pixels * strata.cells() as u64, "adaptive {adaptive}");
+        let (m, n) = (strata.rings as f32, strata.sectors as f32);
+        let bound = 4.0 * PI / (m * n) * (2.0 * (m + n)).sqrt() / 2.0 / (pixels as f32).sqrt();
+        assert!((mean - exact).abs() <= bound, "adaptive {adaptive}: {mean} against {exact} (bound {bound})");
     }
 }
 

@@ -24,6 +24,8 @@ pub struct PixelSampler {
     key: u64,
     sample_index: u32,
     dimension: u32,
+    /// Made by `Sampler::pixel_adaptive`: the pixel's adaptive samples.
+    adaptive: bool,
 }
 
 /// A 2-D point set handed out by [`Sampler::pattern_2d`]; [`Sampler::point_2d`] reads its points.
@@ -60,6 +62,7 @@ impl Sampler {
             key: pixel_key(seed, pixel),
             sample_index: 0,
             dimension: 0,
+            adaptive: false,
         })
     }
 
@@ -74,7 +77,14 @@ impl Sampler {
             key: pixel_key(seed, pixel),
             sample_index: 0,
             dimension: 0,
+            adaptive: true,
         })
+    }
+
+    /// Whether this sampler draws a pixel's adaptive samples (`pixel_adaptive`), which estimates may
+    /// spend fewer rays on (see `FinalGather::irradiance`).
+    pub fn is_adaptive(&self) -> bool {
+        matches!(self, Sampler::Pixel(PixelSampler { adaptive: true, .. }))
     }
 
     /// Where in its pixel sample `index` lands, in [0, 1)²: point `shuffle(index)` of the 2-D Sobol

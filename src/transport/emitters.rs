@@ -1,8 +1,9 @@
-//! Choosing points on the emitters: which emitting triangle (a warp tree by emitted power, which keeps
-//! stratified points stratified over the triangles) and a uniform point on it. Pass two's shadow rays and the photons both draw from here.
+//! Choosing points on the emitters: which emitting polygon (a warp tree by emitted power, which keeps
+//! stratified points stratified over the polygons), a uniform point on it, and the triangle under it. Pass two's shadow rays and the photons both draw from here.
 
 use glam::Vec3;
 
+use super::emitter_polygon::EmitterPolygon;
 use crate::mesh::{Mesh, NONE};
 use crate::scene::Material;
 
@@ -133,18 +134,33 @@ impl WarpTree {
 
 const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
-/// The triangles of emitting elements (by their front side's material), for direct light: a triangle
-/// is chosen in proportion to its emitted power by warping a 2-D point down a `WarpTree` over the
-/// triangles' centroids (O(log n) per sample), then the point's leftover places it uniformly on the
-/// triangle, so stratified points stay stratified over the emitters however finely they are meshed.
+/// The triangles of emitting elements (by their front side's material), for direct light, gathered
+/// into emitting polygons: the triangles one scene surface was cut into, when they tile a convex
+/// planar polygon (`EmitterPolygon`), else each triangle alone. A polygon is chosen in proportion to
+/// its emitted power by warping a 2-D point down a `WarpTree` over the polygons' centroids
+/// (O(log n) per sample); the point's leftover places it uniformly on the polygon by one continuous
+/// map, and only then is the mesh triangle under it looked up. So a stratified pattern stays stratified
+/// over a lamp however finely it is meshed (a lamp cut into 50 triangles is sampled exactly as the same
+/// lamp in 2). Within a polygon the density is uniform by area, p_A = P_polygon/A_polygon.
 #[derive(Clone, Debug, Default)]
 pub struct Emitters {
     /// Mesh triangle of each entry, increasing.
     triangle: Vec<u32>,
-    /// Aₜ/pₜ of each entry: the inverse area density of points drawn on it (scene units²).
-    inverse_density: Vec<f32>,
+    /// Polygon of each entry.
+    polygon_of: Vec<u32>,
+    polygons: Vec<Polygon>,
     table: WarpTree,
     total_area: f32,
+}
+
+#[derive(Clone, Debug)]
+struct Polygon {
+    /// Its entries (indices into `Emitters::triangle`), in the order `shape` knows its triangles.
+    entries: Vec<u32>,
+    /// The tiled polygon, or `None` for a single triangle sampled by itself.
+    shape: Option<EmitterPolygon>,
+    /// A/P, the inverse area density of points drawn on it (scene units²).
+    inverse_density: f32,
 }
 
 /// Power weight of an emitting triangle: Φ = A·(Ē_front + Ē_back), Ē the mean over the colour channels
@@ -162,7 +178,6 @@ impl Emitters {
         let mut triangle = Vec::new();
         let mut area = Vec::new();
         let mut power = Vec::new();
-        let mut centroid = Vec::new();
         for (t, tri) in mesh.triangles.iter().enumerate() {
             let front = mesh.triangle_element[t] as usize;
             if !materials[e.material[front] as usize].is_emitter() {
@@ -176,14 +191,44 @@ impl Emitters {
                 triangle.push(t as u32);
                 area.push(a);
                 power.push(phi);
-                centroid.push((p[0] + p[1] + p[2]) / 3.0);
             }
         }
-        let Some(table) = WarpTree::new(&power, &centroid) else {
+        let corners = |i: usize| mesh.triangles[triangle[i] as usize].map(|v| mesh.positions[v as usize]);
+        // Entries of one mesh surface are contiguous (the mesher emits a surface's triangles together).
+        let mut polygons = Vec::new();
+        let mut weights = Vec::new();
+        let mut centroids = Vec::new();
+        let mut start = 0;
+        while start < triangle.len() {
+            let surface = |i: usize| e.surface[mesh.triangle_element[triangle[i] as usize] as usize];
+            let end = (start..triangle.len()).find(|&i| surface(i) != surface(start)).unwrap_or(triangle.len());
+            let tris: Vec<[Vec3; 3]> = (start..end).map(corners).collect();
+            let normal = e.normal[mesh.triangle_element[triangle[start] as usize] as usize];
+            let groups: Vec<(Vec<u32>, Option<EmitterPolygon>)> = match EmitterPolygon::new(&tris, normal) {
+                Some(shape) if end - start > 1 => vec![((start as u32..end as u32).collect(), Some(shape))],
+                _ => (start as u32..end as u32).map(|i| (vec![i], None)).collect(),
+            };
+            for (entries, shape) in groups {
+                let a: f64 = entries.iter().map(|&i| area[i as usize]).sum();
+                weights.push(entries.iter().map(|&i| power[i as usize]).sum::<f64>());
+                let c =
+                    entries.iter().map(|&i| corners(i as usize).iter().sum::<Vec3>() / 3.0 * area[i as usize] as f32);
+                centroids.push(c.sum::<Vec3>() / a as f32);
+                polygons.push(Polygon { entries, shape, inverse_density: a as f32 });
+            }
+            start = end;
+        }
+        let Some(table) = WarpTree::new(&weights, &centroids) else {
             return Emitters::default();
         };
-        let inverse_density = area.iter().enumerate().map(|(i, a)| (a / table.probability(i)) as f32).collect();
-        Emitters { triangle, inverse_density, table, total_area: area.iter().sum::<f64>() as f32 }
+        let mut polygon_of = vec![0u32; triangle.len()];
+        for (k, polygon) in polygons.iter_mut().enumerate() {
+            polygon.inverse_density = (polygon.inverse_density as f64 / table.probability(k)) as f32;
+            for &i in &polygon.entries {
+                polygon_of[i as usize] = k as u32;
+            }
+        }
+        Emitters { triangle, polygon_of, polygons, table, total_area: area.iter().sum::<f64>() as f32 }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -195,36 +240,49 @@ impl Emitters {
         self.triangle.len()
     }
 
+    /// Number of emitting polygons (sets of triangles sampled as one surface, or single triangles).
+    pub fn polygon_count(&self) -> usize {
+        self.polygons.len()
+    }
+
     /// Total area A of the emitting triangles (scene units²).
     pub fn total_area(&self) -> f32 {
         self.total_area
     }
 
-    /// p_A(x) = pₜ/Aₜ, the area density with which `sample` draws a point on mesh triangle `t`
-    /// (0 for a triangle that is not an emitter here). O(log n); for the MIS weights of rays that hit
-    /// an emitter by chance.
+    /// p_A(x) = P_polygon/A_polygon, the area density with which `sample` draws a point on mesh
+    /// triangle `t` (0 for a triangle that is not an emitter here). O(log n); for the MIS weights of
+    /// rays that hit an emitter by chance.
     pub fn area_density(&self, t: u32) -> f32 {
         match self.triangle.binary_search(&t) {
-            Ok(i) => 1.0 / self.inverse_density[i],
+            Ok(i) => 1.0 / self.polygons[self.polygon_of[i] as usize].inverse_density,
             Err(_) => 0.0,
         }
     }
 
-    /// The point for uniform numbers (ξ, r): the `WarpTree` selects the triangle in proportion to its
-    /// power and hands on (ξ, r) rescaled, which place the point on it (`uniform_triangle_point`).
+    /// The point for uniform numbers (ξ, r): the `WarpTree` selects the polygon in proportion to its
+    /// power and hands on (ξ, r) rescaled, which place the point on it (`EmitterPolygon::point`, or
+    /// `uniform_triangle_point` for a lone triangle); the triangle is the one under the point.
     /// `None` without emitters.
     pub fn sample(&self, mesh: &Mesh, xi: f32, r: f32) -> Option<EmitterSample> {
         if self.triangle.is_empty() {
             return None;
         }
-        let (i, [s, r]) = self.table.select([xi, r]);
-        let t = self.triangle[i];
-        let corners = mesh.triangles[t as usize].map(|v| mesh.positions[v as usize]);
-        Some(EmitterSample {
-            triangle: t,
-            point: uniform_triangle_point(corners, s, r),
-            inverse_density: self.inverse_density[i],
-        })
+        let (k, rest) = self.table.select([xi, r]);
+        let polygon = &self.polygons[k];
+        let (entry, point) = match &polygon.shape {
+            Some(shape) => {
+                let point = shape.point(rest);
+                (polygon.entries[shape.triangle_at(point)], point)
+            }
+            None => {
+                let entry = polygon.entries[0];
+                let corners =
+                    mesh.triangles[self.triangle[entry as usize] as usize].map(|v| mesh.positions[v as usize]);
+                (entry, uniform_triangle_point(corners, rest[0], rest[1]))
+            }
+        };
+        Some(EmitterSample { triangle: self.triangle[entry as usize], point, inverse_density: polygon.inverse_density })
     }
 }
 

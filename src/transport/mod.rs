@@ -5,6 +5,7 @@
 //! either pass.
 
 pub mod cut_outs;
+pub mod emitter_polygon;
 pub mod emitters;
 pub mod hit;
 pub mod optics;

@@ -36,8 +36,9 @@ pub fn for_image(
     on_level_done: &(dyn Fn(usize) + Sync),
 ) -> (FinalGather, PrepassStats) {
     let strata = Strata::for_rays(params.gather_rays);
+    let adaptive_strata = Strata::for_rays(adaptive_gather_rays(params.gather_rays));
     if params.cache_accuracy <= 0.0 {
-        return (FinalGather { strata, cache: None }, PrepassStats::default());
+        return (FinalGather { strata, adaptive_strata, cache: None }, PrepassStats::default());
     }
     let (cache, stats) = fill(
         tracer,
@@ -50,13 +51,24 @@ pub fn for_image(
         image.seed,
         on_level_done,
     );
-    (FinalGather { strata, cache: Some(cache) }, stats)
+    (FinalGather { strata, adaptive_strata, cache: Some(cache) }, stats)
+}
+
+/// An adaptive sample's own gathers take this fraction of `gather_rays` (see `FinalGather::irradiance`).
+pub const ADAPTIVE_GATHER_DIVISOR: u32 = 4;
+
+/// Rays of a gather made for an adaptive sample: `gather_rays` / [`ADAPTIVE_GATHER_DIVISOR`], at least
+/// 16 (a 2 × 8 stratification).
+pub fn adaptive_gather_rays(gather_rays: u32) -> u32 {
+    (gather_rays / ADAPTIVE_GATHER_DIVISOR).max(16)
 }
 
 /// Where the gathered indirect irradiance comes from during the image.
 #[derive(Clone, Debug)]
 pub struct FinalGather {
     pub strata: Strata,
+    /// The strata of the gathers adaptive samples make (`adaptive_gather_rays`).
+    pub adaptive_strata: Strata,
     /// The prepass's records; `None` gathers at every diffuse hit (`cache_accuracy = 0`).
     pub cache: Option<IrradianceCache>,
 }
@@ -65,10 +77,19 @@ impl FinalGather {
     /// The indirect irradiance at diffuse point `p` with normal `n`: the cache's interpolation where a
     /// record serves, else a gather of its own (drawn from the pixel's `sampler`, not stored, so the
     /// image does not depend on which thread got there first).
+    ///
+    /// A pixel's adaptive samples (`Sampler::is_adaptive`) land where the base samples disagreed:
+    /// silhouettes and contact edges, where the cache serves least, so most of them gather. Their
+    /// gathers use `adaptive_strata`, a quarter of the rays. This adds no bias: a gather is a stratified
+    /// estimate Ĥ = Σ_cells (π/MN)·L(ω_jk), one jittered direction per cell, and E[Ĥ] = H for any
+    /// M × N (each cell's jitter is uniform over it), so only its variance grows, about 4×; the pixel
+    /// averages that gather with its other samples (tens of them in an adaptive pixel), whose own
+    /// noise (edges, direct light) is what sent it to the adaptive pass.
     pub fn irradiance(&self, tracer: &Tracer, p: Vec3, n: Vec3, sampler: &mut Sampler, counts: &mut RayCounts) -> Vec3 {
         if let Some(e) = self.cache.as_ref().and_then(|c| c.lookup(p, n)) {
             return e;
         }
-        tracer.gather(p, n, self.strata, sampler, counts).irradiance
+        let strata = if sampler.is_adaptive() { self.adaptive_strata } else { self.strata };
+        tracer.gather(p, n, strata, sampler, counts).irradiance
     }
 }
