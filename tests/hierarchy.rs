@@ -649,18 +649,18 @@ fn near_link_leaf_pair_estimator_matches_polygon_to_polygon_cases() {
     assert_eq!(checked, 9);
 }
 
-/// The near-link ray estimator (`visibility::sampled_form_factor`, Wallace et al.'s disk estimator,
-/// used by `links::near_form_factor` above 64 leaf pairs) against every polygon-to-polygon case, with
-/// the default 8 visibility rays (16 point pairs), averaged over 64 seeds: its bias must be within 4
-/// standard errors of that mean.
+/// The near-link ray estimator (`visibility::sampled_form_factor`: Lambert's exact point-to-element
+/// form factor from a sampled receiver point to a source element drawn by area, times the ray
+/// visibility; used by `links::near_form_factor` above 64 leaf pairs) against every
+/// polygon-to-polygon case, with the default 8 visibility rays (16 samples), averaged over 64 seeds.
+/// The estimator is unbiased by construction (E[F(x → T)/p(T)] = F(x → S)), so the mean's deviation
+/// from the exact value is pure noise: the tolerance is 4 standard errors of the mean (measured from
+/// the 64 samples themselves), plus 1e-5 relative for the f32 form factor and ray offsets.
 ///
-/// Ignored: it is biased low where the ends are close, because each sample's kernel is divided by
-/// π d² + A_S/N and the disk term dominates near the ends' contact. Measured (bias relative, standard
-/// error): parallel squares at separation 0.5 −4.3% (2.6%), at 1 and 2 within 1.2%; perpendicular
-/// rectangles sharing an edge −18% to −42% (4–6%); disks r 1 → 2 at separation 0.5 −30% (3.7%); other
-/// disks within 1.6%. This is suspect (a) of issue 10 for near cluster links, still to fix.
+/// Until session 7 this was Wallace et al.'s disk estimator, A_S cos θ_x cos θ_y / (π d² + A_S/N) per
+/// point pair, and the test was ignored: biased low by 18–42% on perpendicular rectangles sharing an
+/// edge, 30% on disks r 1 → 2 at separation 0.5, 4.3% on parallel squares at separation 0.5.
 #[test]
-#[ignore = "the ray-traced near-link estimator is biased low by 18-42% on touching or close cases (see doc comment)"]
 fn near_link_ray_estimator_is_unbiased_on_polygon_to_polygon_cases() {
     use radray::radiosity::hierarchy::links::near_form_factor;
     use radray::radiosity::hierarchy::visibility::VisibilityContext;
@@ -688,7 +688,7 @@ fn near_link_ray_estimator_is_unbiased_on_polygon_to_polygon_cases() {
             (mean - want) / want,
             se / want
         );
-        worst = worst.max((mean - want).abs() / se);
+        worst = worst.max((mean - want).abs() / (se + 1e-5 * want));
     }
     assert!(worst <= 4.0, "worst bias at {worst:.1} standard errors");
 }

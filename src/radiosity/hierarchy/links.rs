@@ -178,7 +178,7 @@ pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
 /// - Near links kept with an estimated F also add `near_push_spread`.
 /// - Near links (`is_near`): ΔF = `near_spread`. When the link's error with that bound is above
 ///   `threshold_w` it is about to be split and F is not estimated (NaN, so that a kept one is caught);
-///   otherwise F = `visibility::sampled_form_factor`, and `None` when no sample pair faces each other.
+///   otherwise F = `near_form_factor`, and `None` when the ends cannot exchange light.
 pub fn estimate(
     nodes: &Nodes,
     ctx: &VisibilityContext,
@@ -298,7 +298,8 @@ pub const EXACT_NEAR_PAIRS: usize = 64;
 ///   estimator (Lambert exact in the source, three-point rule over the receiver) over every pair of
 ///   leaf elements below the two ends, times the ray visibility fraction of the link; `None` when
 ///   every pair's F is 0.
-/// - Larger: `visibility::sampled_form_factor`; `None` when no sample pair faces each other.
+/// - Larger: `visibility::sampled_form_factor` (Lambert point-to-element, unbiased); `None` when no
+///   sampled receiver point sees its source element.
 pub fn near_form_factor(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source: usize) -> Option<f32> {
     let (mut rs, mut ss) = (Vec::new(), Vec::new());
     let small = leaves_below(nodes, receiver, EXACT_NEAR_PAIRS, &mut rs)
