@@ -76,23 +76,9 @@ pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, 
 }
 
 /// A point uniformly distributed by area on `node` from (u, v) in [0,1)² (descending clusters with
-/// fresh random numbers), and the unit normal of the element it lies on.
+/// fresh random numbers, `sample_element`), and the unit normal of the element it lies on.
 fn sample_point(nodes: &Nodes, node: usize, u: f32, v: f32, rng: &mut Pcg32) -> (Vec3, Vec3) {
-    let mut at = node;
-    while nodes.is_cluster[at] {
-        let children = nodes.children(at);
-        let total: f32 = children.clone().map(|c| nodes.area[c]).sum();
-        let mut pick = rng.next_f32() * total;
-        let mut chosen = children.end - 1;
-        for c in children {
-            if pick < nodes.area[c] {
-                chosen = c;
-                break;
-            }
-            pick -= nodes.area[c];
-        }
-        at = chosen;
-    }
+    let (at, _) = sample_element(nodes, node, rng);
     (triangle_point(&nodes.corners[at], u, v), nodes.normal[at])
 }
 
@@ -203,18 +189,15 @@ fn solid_angle_point(x: Vec3, t: &[Vec3; 3], u1: f32, u2: f32) -> Option<Vec3> {
 }
 
 /// An element below `node` (the node itself if it is one) drawn by descending its cluster tree with
-/// probabilities proportional to area, and the probability it was drawn with relative to its area
-/// share, A_T / A_node for a tree whose clusters' areas are their children's sums (0 if nothing below
-/// `node` has area).
+/// probabilities proportional to area (one random number per level), and the probability it was
+/// drawn with: A_T / A_node for a tree whose clusters' areas are their children's sums, 0 if a
+/// cluster on the way has no area (the descent still goes on, to its last child).
 fn sample_element(nodes: &Nodes, node: usize, rng: &mut Pcg32) -> (usize, f64) {
     let mut at = node;
     let mut probability = 1.0f64;
     while nodes.is_cluster[at] {
         let children = nodes.children(at);
         let total: f32 = children.clone().map(|c| nodes.area[c]).sum();
-        if !(total > 0.0) {
-            return (at, 0.0);
-        }
         let mut pick = rng.next_f32() * total;
         let mut chosen = children.end - 1;
         for c in children {
@@ -224,7 +207,7 @@ fn sample_element(nodes: &Nodes, node: usize, rng: &mut Pcg32) -> (usize, f64) {
             }
             pick -= nodes.area[c];
         }
-        probability *= nodes.area[chosen] as f64 / total as f64;
+        probability *= if total > 0.0 { nodes.area[chosen] as f64 / total as f64 } else { 0.0 };
         at = chosen;
     }
     (at, probability)
