@@ -26,6 +26,7 @@ fn film_overhead(c: &mut Criterion) {
             adaptive_threshold: None,
             adaptive_error: None,
             adaptive_max_samples: 16,
+            adaptive_budget: film::DEFAULT_ADAPTIVE_BUDGET,
             seed: 1,
             exposure: Default::default(),
         };

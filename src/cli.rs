@@ -174,10 +174,13 @@ pub struct SolveArgs {
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
     /// Compute only the form-factor rows of every N-th receiver group, starting at K (0-based), and
-    /// write them to -o as a part for --merge.
-    #[arg(long, value_name = "K/N", value_parser = parse_shard_arg, conflicts_with = "merge")]
+    /// write them to -o as a part for --merge (hierarchical method: refine the next refinement pass
+    /// for this shard's receiver groups and write its link estimates; with --merge PARTS of the passes
+    /// before it).
+    #[arg(long, value_name = "K/N", value_parser = parse_shard_arg)]
     pub shard: Option<Shard>,
-    /// Join the parts of `--shard 0/N` … `--shard N-1/N` (each exactly once) and solve.
+    /// Join the parts of `--shard 0/N` … `--shard N-1/N` (each exactly once) and solve (with --shard:
+    /// the hierarchy's parts of the passes before the one to shard).
     #[arg(long, value_name = "PART", num_args = 1..)]
     pub merge: Vec<PathBuf>,
 }

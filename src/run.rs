@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 
+mod film_stages;
 mod layers;
 
 pub use layers::check_layers_path;
@@ -23,8 +24,8 @@ use crate::output::{self, Exposure, OutputError, ToneCurve};
 use crate::progress::{Progress, Verbosity};
 use crate::radiosity::hierarchical;
 use crate::radiosity::matrix::rows_file::RowsFileError;
-use crate::radiosity::method::{self, MethodError, Reuse};
-use crate::radiosity::resume::{self, Checkpointer, Resume};
+use crate::radiosity::method::{self, MethodError, Reuse, ShardMethod};
+use crate::radiosity::resume::{self, Checkpointer, Resume, ShardError};
 use crate::radiosity::solution_file::{self, SolutionFileError};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
@@ -118,6 +119,10 @@ pub struct RunStats {
     pub rays_per_second: f64,
     pub samples: u64,
     pub adaptive_extra_samples: u64,
+    /// Pixels that took adaptive samples, and the seconds the adaptive pass took (part of
+    /// `render_seconds`).
+    pub adaptive_pixels: u64,
+    pub adaptive_seconds: f64,
     pub peak_memory_bytes: u64,
 }
 
@@ -220,11 +225,22 @@ impl Runner {
         // One set of photons for both passes of this job (traced only if a pass needs them).
         let photons = RunPhotons::default();
         if let (Work::Solve { output }, Some(shard)) = (&job.work, self.reuse.resume.shard) {
-            let matrix = method::matrix_for_shards(&scene).map_err(MethodError::from)?;
-            let mesh = build_mesh(&scene, progress)?;
-            let (rows, stats) = matrix.shard_rows(&scene, &mesh, &photons, &self.reuse.resume, progress)?;
-            outcome.stats.pass_one = stats;
-            resume::write_part(output, method::scene_keys(&scene, &mesh), shard, &rows)?;
+            match method::shard_method(&scene).map_err(MethodError::from)? {
+                ShardMethod::Matrix(_) if !self.reuse.resume.merge.is_empty() => {
+                    return Err(MethodError::from(ShardError::MatrixRounds).into());
+                }
+                ShardMethod::Matrix(matrix) => {
+                    let mesh = build_mesh(&scene, progress)?;
+                    let (rows, stats) = matrix.shard_rows(&scene, &mesh, &photons, &self.reuse.resume, progress)?;
+                    outcome.stats.pass_one = stats;
+                    resume::write_part(output, method::scene_keys(&scene, &mesh), shard, &rows)?;
+                }
+                ShardMethod::Hierarchy(hierarchy) => {
+                    let textures = Arc::new(load_textures(&scene, progress));
+                    outcome.stats.pass_one =
+                        hierarchy.shard_part(&scene, textures, shard, &self.reuse.resume, output, progress)?;
+                }
+            }
             outcome.written.push(output.clone());
             self.remove_checkpoint();
             return Ok(());
@@ -280,7 +296,10 @@ impl Runner {
         }
         let resume = &self.reuse.resume;
         let method: Box<dyn method::PassOneMethod> = if resume.needs_matrix() {
-            Box::new(method::matrix_for_shards(scene).map_err(MethodError::from)?)
+            match method::shard_method(scene).map_err(MethodError::from)? {
+                ShardMethod::Matrix(matrix) => Box::new(matrix),
+                ShardMethod::Hierarchy(hierarchy) => Box::new(hierarchy),
+            }
         } else {
             method::for_scene(scene)
         };
@@ -544,12 +563,8 @@ pub fn render(
     let image = &scene.image;
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
     let tracer = tracer_for(scene, mesh, accel, solution, mode, photons, progress, stats)?;
-    let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
-    let stage = progress.stage(
-        if mode == TraceMode::Final { "render final" } else { "render radiosity" },
-        tiles as u64,
-        "tiles",
-    );
+    let name = if mode == TraceMode::Final { "render final" } else { "render radiosity" };
+    let stages = film_stages::FilmStages::start(progress, name, image);
     let start = Instant::now();
     let (picture, film_stats, counts) = film::render_with(
         image,
@@ -558,7 +573,7 @@ pub fn render(
             let ray = camera.ray(x, y);
             tracer.radiance(ray.origin, ray.dir, mode, sampler, counts)
         },
-        &|| stage.inc(1),
+        &stages,
     );
     let seconds = start.elapsed().as_secs_f64();
     let total: RayCounts = counts.into_iter().sum();
@@ -568,14 +583,17 @@ pub fn render(
     stats.shadow_rays += total.shadow;
     stats.samples += film_stats.samples;
     stats.adaptive_extra_samples += film_stats.adaptive_extra_samples;
+    stats.adaptive_pixels += film_stats.adaptive_pixels;
     let rays = total.primary + total.secondary + total.shadow;
     stats.rays_per_second =
         (stats.primary_rays + stats.secondary_rays + stats.shadow_rays) as f64 / stats.render_seconds.max(1e-9);
-    stage.finish(&format!(
-        "{}×{} at {} spp: {} rays ({:.2} M rays/s)",
+    stats.adaptive_seconds += stages.finish(&format!(
+        "{}×{} at {} spp, {} adaptive samples in {} pixels: {} rays ({:.2} M rays/s) in {seconds:.1} s",
         image.width_px,
         image.height_px,
         image.samples_per_pixel,
+        film_stats.adaptive_extra_samples,
+        film_stats.adaptive_pixels,
         rays,
         rays as f64 / seconds.max(1e-9) / 1e6
     ));
@@ -612,8 +630,12 @@ pub fn tracer_for<'a>(
         return Ok(tracer);
     }
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
-    let stage = progress.stage("final gather prepass", 1, "caches");
-    let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad);
+    let stage = progress.stage("final gather prepass", gather::LEVELS as u64, "levels");
+    let on_level_done = |records: usize| {
+        stage.inc(1);
+        stage.set_message(format!("{records} records"));
+    };
+    let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad, &on_level_done);
     stats.secondary_rays += prepass.rays.total();
     stage.finish(&format!("{} records from {} gathers", prepass.records, prepass.candidates));
     Ok(tracer.with_final_gather(gather))

@@ -8,7 +8,7 @@ use radray::film::{self, FilterSampler, Image};
 use radray::output::{self, OutputError, ToneCurve};
 use radray::rng::Pcg32;
 use radray::scene::{FilterKind, ImageSettings};
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 const ALL_FILTERS: [FilterKind; 4] = [FilterKind::Box, FilterKind::Tent, FilterKind::Gaussian, FilterKind::Mitchell];
 
@@ -28,6 +28,9 @@ fn settings(
         adaptive_threshold: None,
         adaptive_error: None,
         adaptive_max_samples: samples_per_pixel,
+        // No total budget: the adaptive tests below check the criteria alone (on films of a few
+        // pixels, a thin border is a large share of the image); the budget has tests of its own.
+        adaptive_budget: f32::INFINITY,
         seed: 42,
         exposure: Default::default(),
     }
@@ -318,6 +321,51 @@ fn adaptive_error_supersamples_the_dark_side_of_a_thin_emitter_border() {
     assert!(stats.adaptive_pixels >= height as u64);
 }
 
+fn wanted(requests: &[(u32, u32, f32)]) -> Vec<film::Wanted> {
+    requests.iter().map(|&(pixel, samples, priority)| film::Wanted { pixel, samples, priority }).collect()
+}
+
+#[test]
+fn requests_within_the_adaptive_budget_are_kept_as_they_are() {
+    let w = wanted(&[(3, 256, 9.0), (7, 32, 1.5), (9, 64, 2.5)]);
+    // 240 + 16 + 48 = 304 extra samples over 16 base samples.
+    assert_eq!(film::within_budget(w.clone(), 16, 304), w);
+    assert_eq!(film::within_budget(w.clone(), 16, 10_000), w);
+}
+
+#[test]
+fn over_budget_the_largest_requests_are_capped_first() {
+    let w = wanted(&[(3, 256, 9.0), (7, 32, 1.5), (9, 64, 2.5), (12, 128, 4.0)]);
+    // Caps: 256 → 240+16+48+112 = 416, 128 → 112+16+48+112 = 288, 64 → 48+16+48+48 = 160,
+    // 32 → 16·4 = 64. A budget of 300 allows 128, 200 allows 64.
+    let capped = |cap: u32| w.iter().map(|x| film::Wanted { samples: x.samples.min(cap), ..*x }).collect::<Vec<_>>();
+    assert_eq!(film::within_budget(w.clone(), 16, 300), capped(128));
+    assert_eq!(film::within_budget(w.clone(), 16, 200), capped(64));
+    assert_eq!(film::within_budget(w.clone(), 16, 64), capped(32));
+    // Below the smallest request for every pixel: 40 extra samples keep the two most urgent pixels at
+    // 32 (16 extra each), in pixel order.
+    let kept = film::within_budget(w, 16, 40);
+    assert_eq!(kept, wanted(&[(3, 32, 9.0), (12, 32, 4.0)]));
+    assert_eq!(film::within_budget(Vec::new(), 16, 0), Vec::new());
+}
+
+#[test]
+fn the_adaptive_pass_spends_at_most_its_budget_on_an_image_that_is_noisy_everywhere() {
+    // Every sample is independent noise (`noisy_shader`), so the standard-error criterion at a tight
+    // bound asks for the cap in nearly every pixel; the budget keeps the extra samples within
+    // `adaptive_budget` times the base samples.
+    let mut s = settings(48, 32, 16, FilterKind::Box, 0.5);
+    s.adaptive_error = Some(0.001);
+    s.adaptive_max_samples = 256;
+    s.adaptive_budget = 0.75;
+    let (_, stats) = film::render(&s, noisy_shader, &no_progress);
+    let base = 48 * 32 * 16;
+    let budget = (0.75 * base as f64) as u64;
+    assert!(stats.adaptive_extra_samples <= budget, "{} > {budget}", stats.adaptive_extra_samples);
+    assert!(stats.adaptive_extra_samples > budget / 2, "the budget should be used: {}", stats.adaptive_extra_samples);
+    assert_eq!(stats.samples, base as u64 + stats.adaptive_extra_samples);
+}
+
 #[test]
 fn non_finite_samples_are_dropped_and_counted() {
     // Samples in the left quarter of each pixel return NaN or ∞; the rest 0.5. Box r = 0.5, 16 N-rook
@@ -353,6 +401,54 @@ fn every_tile_reports_done_once() {
     // ⌈40/16⌉·⌈20/16⌉ = 3·2 tiles.
     assert_eq!(done.load(Ordering::Relaxed), 6);
     assert_eq!(stats.tiles, 6);
+}
+
+/// A `FilmProgress` that records what it hears.
+#[derive(Default)]
+struct Recorded {
+    tiles: AtomicU64,
+    starts: AtomicU64,
+    pixels: AtomicU64,
+    announced: AtomicU64,
+    done: AtomicU64,
+}
+
+impl film::FilmProgress for Recorded {
+    fn tile_done(&self) {
+        self.tiles.fetch_add(1, Ordering::Relaxed);
+    }
+    fn adaptive_start(&self, pixels: u64, extra_samples: u64) {
+        self.starts.fetch_add(1, Ordering::Relaxed);
+        self.pixels.store(pixels, Ordering::Relaxed);
+        self.announced.store(extra_samples, Ordering::Relaxed);
+    }
+    fn adaptive_done(&self, extra_samples: u64) {
+        self.done.fetch_add(extra_samples, Ordering::Relaxed);
+    }
+}
+
+#[test]
+fn the_adaptive_pass_reports_its_pixels_and_samples_as_it_goes() {
+    // The thin-emitter-border film of `adaptive_error_supersamples_the_dark_side_of_a_thin_emitter_border`,
+    // 40 rows so that the adaptive pass has several pieces of work: what the pass announces, what it
+    // reports done and what it spent are the same numbers.
+    let mut s = settings(12, 40, 16, FilterKind::Box, 0.5);
+    s.adaptive_error = Some(0.25);
+    s.adaptive_max_samples = 256;
+    let recorded = Recorded::default();
+    let (_, stats) = film::render(&s, |x, _, _| Vec3::splat(if x < 5.02 { 24.0 } else { 0.3 }), &recorded);
+    assert_eq!(recorded.tiles.load(Ordering::Relaxed), 3);
+    assert_eq!(recorded.starts.load(Ordering::Relaxed), 1);
+    assert!(stats.adaptive_pixels >= 40);
+    assert_eq!(recorded.pixels.load(Ordering::Relaxed), stats.adaptive_pixels);
+    assert_eq!(recorded.announced.load(Ordering::Relaxed), stats.adaptive_extra_samples);
+    assert_eq!(recorded.done.load(Ordering::Relaxed), stats.adaptive_extra_samples);
+
+    // Without adaptive samples the pass is not announced.
+    let recorded = Recorded::default();
+    film::render(&settings(12, 40, 16, FilterKind::Box, 0.5), |_, _, _| Vec3::ONE, &recorded);
+    assert_eq!(recorded.starts.load(Ordering::Relaxed), 0);
+    assert_eq!(recorded.tiles.load(Ordering::Relaxed), 3);
 }
 
 #[test]

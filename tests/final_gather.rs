@@ -309,7 +309,13 @@ fn the_cache_interpolates_within_its_error_bound() {
     let camera = PinholeCamera::new(&scene.camera, w, h);
     let angle = scene.camera.vfov_deg.to_radians() / h as f32;
     let accuracy = 0.15;
-    let (cache, _) = fill(&tracer, &camera, w, h, angle, Strata::for_rays(256), accuracy, 3);
+    let levels = std::sync::Mutex::new(Vec::new());
+    let (cache, _) =
+        fill(&tracer, &camera, w, h, angle, Strata::for_rays(256), accuracy, 3, &|r| levels.lock().unwrap().push(r));
+    // The prepass reports each level once, with the records so far.
+    let levels = levels.into_inner().unwrap();
+    assert_eq!(levels.len(), radray::trace::gather::LEVELS);
+    assert!(levels.windows(2).all(|p| p[0] <= p[1]) && levels.last() == Some(&cache.len()), "{levels:?}");
     let mut checked = 0;
     let mut noise = 0.0f32;
     let mut errors = Vec::new();

@@ -162,6 +162,8 @@ fn impossible_image_sizes_are_refused() {
     assert!(msg.contains("scene.toml:8:") && msg.contains("width"), "{msg}");
     let msg = error_of(&format!("{CAMERA}\n[image]\nsamples_per_pixel = -4\n{LIGHT_AND_QUAD}"));
     assert!(msg.contains("samples_per_pixel"), "{msg}");
+    let msg = error_of(&format!("{CAMERA}\n[image]\nadaptive_budget = -0.5\n{LIGHT_AND_QUAD}"));
+    assert!(msg.contains("scene.toml:8:") && msg.contains("adaptive_budget"), "{msg}");
 }
 
 #[test]

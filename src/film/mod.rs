@@ -14,8 +14,9 @@ pub use filter::{
 pub use image::{luminance, Image};
 pub use sampler::{owen_scramble, owen_sobol_2d, sobol_2d_bits, Pattern2d, PixelSampler, Sampler};
 pub use tiles::{
-    luminance_contrast, one_sample_error, render, render_samples_with, render_with, FilmSample, FilmStats,
-    ADAPTIVE_CONTRAST_EPSILON, ADAPTIVE_ERROR_EPSILON_SQ, TILE_SIZE_PX,
+    luminance_contrast, one_sample_error, render, render_samples_with, render_with, within_budget, FilmProgress,
+    FilmSample, FilmStats, Wanted, ADAPTIVE_CONTRAST_EPSILON, ADAPTIVE_ERROR_EPSILON_SQ, DEFAULT_ADAPTIVE_BUDGET,
+    TILE_SIZE_PX,
 };
 
 use crate::scene::ImageSettings;

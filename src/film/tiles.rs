@@ -111,6 +111,24 @@ impl FilmSample for Vec3 {
     }
 }
 
+/// What the film tells its caller while it works (called from worker threads). A closure
+/// `Fn() + Sync` is a `FilmProgress` that counts tiles and ignores the adaptive pass.
+pub trait FilmProgress: Sync {
+    /// One 16×16 tile of base samples is done.
+    fn tile_done(&self);
+    /// The adaptive pass starts: `pixels` pixels will take `extra_samples` samples beyond their base
+    /// samples, in all.
+    fn adaptive_start(&self, _pixels: u64, _extra_samples: u64) {}
+    /// `extra_samples` more adaptive samples are done.
+    fn adaptive_done(&self, _extra_samples: u64) {}
+}
+
+impl<F: Fn() + Sync> FilmProgress for F {
+    fn tile_done(&self) {
+        self()
+    }
+}
+
 /// What the film spent.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct FilmStats {
@@ -141,13 +159,13 @@ impl FilmStats {
 /// reconstructed by normalised weights; then adaptive samples where the base samples ask for them
 /// (see [`render_samples_with`]). Each pixel uses `Sampler::pixel(seed, y·width + x)` for its base
 /// samples and passes it on to the shader, so the image is the same whatever the thread count or tile
-/// order. `on_tile_done` is called (from worker threads) after each 16×16 tile of base samples.
-pub fn render<F>(settings: &ImageSettings, shade: F, on_tile_done: &(dyn Fn() + Sync)) -> (Image, FilmStats)
+/// order. `progress` hears (from worker threads) of each 16×16 tile of base samples and of the adaptive
+/// pass.
+pub fn render<F>(settings: &ImageSettings, shade: F, progress: &dyn FilmProgress) -> (Image, FilmStats)
 where
     F: Fn(f32, f32, &mut Sampler) -> Vec3 + Sync,
 {
-    let (image, stats, _) =
-        render_with(settings, || (), |_: &mut (), x, y, sampler| shade(x, y, sampler), on_tile_done);
+    let (image, stats, _) = render_with(settings, || (), |_: &mut (), x, y, sampler| shade(x, y, sampler), progress);
     (image, stats)
 }
 
@@ -158,14 +176,14 @@ pub fn render_with<S, I, F>(
     settings: &ImageSettings,
     init: I,
     shade: F,
-    on_tile_done: &(dyn Fn() + Sync),
+    progress: &dyn FilmProgress,
 ) -> (Image, FilmStats, Vec<S>)
 where
     S: Send,
     I: Fn() -> S + Sync,
     F: Fn(&mut S, f32, f32, &mut Sampler) -> Vec3 + Sync,
 {
-    let (pixels, stats, states) = render_samples_with(settings, init, shade, on_tile_done);
+    let (pixels, stats, states) = render_samples_with(settings, init, shade, progress);
     (Image { width_px: settings.width_px, height_px: settings.height_px, pixels }, stats, states)
 }
 
@@ -175,7 +193,8 @@ where
 /// `adaptive_max_samples` exceeds them, a pixel takes samples up to that count (continuing its
 /// sequence, from `Sampler::pixel_adaptive`) if its own samples' contrast exceeds
 /// `adaptive_threshold` (Whitted 1980), or if [`one_sample_error`] over its and its neighbours' samples
-/// (those within the filter's reach plus one pixel) exceeds `adaptive_error`. The decision reads only
+/// (those within the filter's reach plus one pixel) exceeds `adaptive_error`; all of them together take
+/// at most `adaptive_budget` times the base samples ([`within_budget`]). The decision reads only
 /// base samples, so it does not depend on the schedule either. The adaptive samples join the pixel as
 /// more samples of the same estimate: the base samples enter as their reconstruction with the sum of
 /// their weights (exact whenever that sum is positive, as it always is for box, tent and Gaussian).
@@ -183,7 +202,7 @@ pub fn render_samples_with<T, S, I, F>(
     settings: &ImageSettings,
     init: I,
     shade: F,
-    on_tile_done: &(dyn Fn() + Sync),
+    progress: &dyn FilmProgress,
 ) -> (Vec<T>, FilmStats, Vec<S>)
 where
     T: FilmSample,
@@ -226,7 +245,7 @@ where
                 let x1 = (x0 + TILE_SIZE_PX).min(width);
                 let y1 = (y0 + TILE_SIZE_PX).min(height);
                 done.push(plan.render_tile(x0, y0, x1, y1, &mut state, &shade));
-                on_tile_done();
+                progress.tile_done();
                 (state, done)
             },
         )
@@ -251,10 +270,17 @@ where
     let mut pixels: Vec<T> = records.iter().map(|r| r.value).collect();
     if plan.extra_samples > 0 {
         let max_samples = base_samples + plan.extra_samples;
-        let chosen: Vec<(u32, u32)> = (0..width * height)
-            .filter_map(|p| criteria.samples_wanted(&records, width, height, p, max_samples).map(|n| (p, n)))
-            .filter(|&(_, n)| n > base_samples)
+        let wanted: Vec<Wanted> = (0..width * height)
+            .filter_map(|p| criteria.samples_wanted(&records, width, height, p, max_samples).map(|w| (p, w)))
+            .filter(|&(_, (n, _))| n > base_samples)
+            .map(|(pixel, (samples, priority))| Wanted { pixel, samples, priority })
             .collect();
+        let base_total = width as u64 * height as u64 * base_samples as u64;
+        let budget = (settings.adaptive_budget.max(0.0) as f64 * base_total as f64) as u64;
+        let chosen: Vec<(u32, u32)> =
+            within_budget(wanted, base_samples, budget).into_iter().map(|w| (w.pixel, w.samples)).collect();
+        let extra_of = |chunk: &[(u32, u32)]| chunk.iter().map(|&(_, n)| (n - base_samples) as u64).sum::<u64>();
+        progress.adaptive_start(chosen.len() as u64, extra_of(&chosen));
         let folded: Vec<AdaptiveChunk<S, T>> = chosen
             .par_chunks(ADAPTIVE_CHUNK_PX)
             .fold(
@@ -266,6 +292,7 @@ where
                         let value = plan.add_samples(p, base, total, &mut state, &shade, &mut scratch, &mut stats);
                         done.push((p, value));
                     }
+                    progress.adaptive_done(extra_of(chunk));
                     (state, done, stats)
                 },
             )
@@ -279,6 +306,50 @@ where
         }
     }
     (pixels, stats, states)
+}
+
+/// `[image] adaptive_budget` by default: the most adaptive samples one image takes, as a multiple of its
+/// base samples (width × height × samples per pixel). The criteria alone bound each pixel's error, not
+/// the image's cost: on a scene whose samples are noisy everywhere they ask for the cap almost
+/// everywhere (textured Crytek Sponza at 160×90: 75% of the pixels, 5.5× the base samples, about 9× the
+/// base pass's time; docs/performance.md, "Adaptive film on Sponza"). The rooms and the Cornell box ask
+/// for 8–32% (docs/accuracy.md, "Seeds and adaptive sampling"), so this budget leaves them as they were.
+pub const DEFAULT_ADAPTIVE_BUDGET: f32 = 0.5;
+
+/// A pixel the adaptive criteria picked: how many samples in all it asks for, and how urgently (the
+/// factor by which its estimated error exceeds the bound; infinite for Whitted's contrast).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wanted {
+    pub pixel: u32,
+    pub samples: u32,
+    pub priority: f32,
+}
+
+/// Fits the adaptive pixels' requests (each over `base_samples`) into `budget` extra samples in all.
+/// Within budget they are kept as they are. Otherwise every request is capped at the largest of the
+/// requested counts M for which Σ (min(nᵢ, M) − base) ≤ budget, so the pixels that ask the most give
+/// up samples first (an extra sample does the most good where a pixel has the fewest). If even the
+/// smallest requested count does not fit, every pixel is cut to it and they are kept by priority (then
+/// pixel order) while the budget lasts. Returned in pixel order; deterministic.
+pub fn within_budget(mut wanted: Vec<Wanted>, base_samples: u32, budget: u64) -> Vec<Wanted> {
+    let extra = |w: &[Wanted], cap: u32| w.iter().map(|x| (x.samples.min(cap) - base_samples) as u64).sum::<u64>();
+    if extra(&wanted, u32::MAX) <= budget {
+        return wanted;
+    }
+    let mut counts: Vec<u32> = wanted.iter().map(|w| w.samples).collect();
+    counts.sort_unstable();
+    counts.dedup();
+    if let Some(&cap) = counts.iter().rev().find(|&&cap| extra(&wanted, cap) <= budget) {
+        wanted.iter_mut().for_each(|w| w.samples = w.samples.min(cap));
+        return wanted;
+    }
+    let cap = counts[0];
+    wanted.sort_by(|a, b| b.priority.total_cmp(&a.priority).then(a.pixel.cmp(&b.pixel)));
+    let keep = (budget / (cap - base_samples) as u64) as usize;
+    wanted.truncate(keep);
+    wanted.iter_mut().for_each(|w| w.samples = cap);
+    wanted.sort_by_key(|w| w.pixel);
+    wanted
 }
 
 /// What one worker of the adaptive pass returns: its state, the (pixel, value) pairs it redid, and
@@ -324,7 +395,8 @@ impl AdaptiveCriteria {
         self.contrast.is_some() || self.error.is_some()
     }
 
-    /// How many samples in all the pixel should take (None: its base samples are enough). The contrast
+    /// How many samples in all the pixel should take, and its priority (None: its base samples are
+    /// enough). The contrast
     /// criterion asks for `max_samples`. The error criterion asks for as many as bring the estimated
     /// error under the bound: the unseen-feature error falls as 1/n on stratified edges, the standard
     /// error as 1/√n, so n·max(e_unseen/bound, (e_std/bound)²), rounded up to a power of two (so the
@@ -336,11 +408,11 @@ impl AdaptiveCriteria {
         height: u32,
         pixel: u32,
         max_samples: u32,
-    ) -> Option<u32> {
+    ) -> Option<(u32, f32)> {
         let own = &records[pixel as usize];
         let own_range = own.range?;
         if self.contrast.is_some_and(|t| own_range.contrast() > t) {
-            return Some(max_samples);
+            return Some((max_samples, f32::INFINITY));
         }
         let bound = self.error?;
         let (x, y) = (pixel % width, pixel / width);
@@ -359,7 +431,7 @@ impl AdaptiveCriteria {
             return None;
         }
         let wanted = (own.samples as f32 * factor).min(max_samples as f32) as u32;
-        Some(wanted.max(own.samples + 1).next_power_of_two().min(max_samples))
+        Some((wanted.max(own.samples + 1).next_power_of_two().min(max_samples), factor))
     }
 }
 

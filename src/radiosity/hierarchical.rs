@@ -17,12 +17,14 @@ use rayon::prelude::*;
 
 use super::fingerprint::Fnv1a64;
 use super::hierarchy::estimates::{EstimateHooks, EstimateLog};
+use super::hierarchy::part_file::HierarchyPart;
+use super::hierarchy::shards::SharedEstimates;
 use super::hierarchy::{
     self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyError, HierarchyParams, HierarchyProgress,
 };
 use super::leaf_mesh::{self, LeafGeometry, LeafMeshBuild};
 use super::method::{MethodError, PassOne, PassOneMethod, Reuse};
-use super::resume::{self, Checkpointer, SceneKeys};
+use super::resume::{self, Checkpointer, Resume, SceneKeys, Shard};
 use super::solution::Solution;
 use super::stats::{PassOneStats, ResumeStats, SolveStats};
 use crate::accel::Accel;
@@ -294,6 +296,11 @@ impl PassOneMethod for Hierarchical {
             None => EstimateLog::default(),
         };
         let logged = log.entries.len();
+        // A merge (`--merge`): the whole solve, with the shards' estimates (`hierarchy::shards`).
+        let shared = match resume.merge.is_empty() {
+            true => None,
+            false => Some(SharedEstimates::for_merge(resume::merge_hierarchy_parts(&resume.merge, keys)?.1)),
+        };
         let load_seconds = load_start.elapsed().as_secs_f64();
         let mut checkpointer =
             resume.checkpoint.as_ref().map(|path| Checkpointer::for_hierarchy(path.clone(), keys, resume.interval));
@@ -307,7 +314,8 @@ impl PassOneMethod for Hierarchical {
                 }
             }
         };
-        let mut hooks = EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk };
+        let mut hooks =
+            EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: shared.as_ref() };
         let solved = hierarchy::solve_logged(
             scene,
             mesh.textures.clone(),
@@ -419,6 +427,22 @@ impl PassOneMethod for Hierarchical {
                 checkpoint_seconds: checkpointer.write_seconds,
             });
         }
+        if let Some(shared) = &shared {
+            let hits = shared.hits() as usize;
+            progress.note(&format!(
+                "merge: {hits} of {} link estimates from the {} parts ({} held), {} computed here",
+                log.computed,
+                resume.merge.len(),
+                shared.known_len(),
+                log.computed - hits
+            ));
+            resume_stats = Some(ResumeStats {
+                rows_resumed: hits,
+                rows_computed: log.computed - hits,
+                load_seconds,
+                ..Default::default()
+            });
+        }
         let stats = PassOneStats {
             elements: leaf_mesh.elements.len(),
             solver: Some(self.name()),
@@ -429,5 +453,79 @@ impl PassOneMethod for Hierarchical {
             ..Default::default()
         };
         Ok(PassOne { mesh: leaf_mesh, solution, stats, reused_form_factors: reused })
+    }
+}
+
+impl Hierarchical {
+    /// Shard `shard` of a hierarchical solve (`solve --shard K/N [--merge PARTS]`): with the parts of
+    /// passes 1..p (none for p = 0), runs those passes whole (taking their pure estimates from the
+    /// parts), refines pass p + 1 for the shard's receiver groups (`hierarchy::shards`) and writes
+    /// its pure link estimates to `output` as a part for the next round or `--merge`. A shard keeps
+    /// no checkpoint (an interrupted shard starts again).
+    pub fn shard_part(
+        &self,
+        scene: &SceneDescription,
+        textures: Arc<SceneTextures>,
+        shard: Shard,
+        resume: &Resume,
+        output: &std::path::Path,
+        progress: &Progress,
+    ) -> Result<PassOneStats, MethodError> {
+        self.check_memory(scene, &Mesh::default())?;
+        let params = hierarchy_params(scene);
+        let keys = SceneKeys {
+            fingerprint: scene_fingerprint(scene, &params, &textures),
+            form_factor_key: link_key(scene, &params, &textures),
+        };
+        let (done, earlier) = match resume.merge.is_empty() {
+            true => (0, Vec::new()),
+            false => resume::merge_hierarchy_parts(&resume.merge, keys)?,
+        };
+        let pass = done + 1;
+        if pass > params.refinement_passes {
+            return Err(resume::ShardError::EveryPassDone { passes: params.refinement_passes }.into());
+        }
+        let stage = progress.stage("hierarchy shard", 1, "passes");
+        let start = Instant::now();
+        let shared = SharedEstimates::for_shard(shard.index, shard.count, pass, earlier);
+        let mut log = EstimateLog::default();
+        let cancel = &resume.cancel;
+        let stop = || cancel.is_requested();
+        let mut after_chunk = |_: &EstimateLog, computed: usize| (0..computed).for_each(|_| cancel.row_done());
+        let mut hooks =
+            EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: Some(&shared) };
+        let solved = hierarchy::solve_logged(scene, textures, &params, None, &mut hooks, &mut |p| {
+            if let HierarchyProgress::Refining { pass, round, links, nodes } = p {
+                stage.set_message(format!(
+                    "shard {}/{} pass {pass} round {round}: {nodes} nodes, {links} links",
+                    shard.index, shard.count
+                ));
+            }
+        });
+        let (solved, _) = match solved {
+            Err(HierarchyError::Stopped) => {
+                let signal = cancel.signal().unwrap_or(crate::interrupt::SIGINT);
+                return Err(MethodError::Interrupted { signal, checkpoint: None });
+            }
+            other => {
+                other.map_err(|source| MethodError::Hierarchy { scene: scene.path.display().to_string(), source })?
+            }
+        };
+        let part = HierarchyPart { pass, entries: shared.take_recorded() };
+        resume::write_hierarchy_part(output, keys, shard, &part).map_err(resume::ShardError::from)?;
+        stage.finish(&format!(
+            "shard {}/{} of pass {pass}: {} links estimated ({} from the parts), {} of them shared",
+            shard.index,
+            shard.count,
+            log.computed,
+            shared.hits(),
+            part.entries.len()
+        ));
+        Ok(PassOneStats {
+            solver: Some(self.name()),
+            solve_seconds: start.elapsed().as_secs_f64(),
+            hierarchy: Some(solved.stats),
+            ..Default::default()
+        })
     }
 }

@@ -511,14 +511,23 @@ pub fn scene_keys(scene: &SceneDescription, mesh: &Mesh) -> SceneKeys {
     }
 }
 
-/// The matrix method that computes shard rows and solves merged parts: the scene's method when it
-/// is the stored matrix, else `ShardError::NotMatrix`.
-pub fn matrix_for_shards(scene: &SceneDescription) -> Result<FullMatrix, ShardError> {
+/// A method that computes shards of pass one and solves merged parts.
+pub enum ShardMethod {
+    /// The stored matrix: a shard computes every N-th group of rows.
+    Matrix(FullMatrix),
+    /// The hierarchy: a shard refines pass one for its receiver groups (`hierarchy::shards`).
+    Hierarchy(Hierarchical),
+}
+
+/// The scene's method for `--shard` and `--merge`: the stored matrix on the uniform mesh, or the
+/// hierarchy; else `ShardError::NotMatrix`.
+pub fn shard_method(scene: &SceneDescription) -> Result<ShardMethod, ShardError> {
     let method = for_scene(scene);
-    // The full matrix is the one method on the uniform mesh that checkpoints (the hierarchy
-    // checkpoints too, but cannot shard: see the README).
+    // The full matrix is the one method on the uniform mesh that checkpoints.
     if method.uses_uniform_mesh() && method.checkpoints() && scene.radiosity.store_form_factors {
-        Ok(FullMatrix { solver: scene.radiosity.solver })
+        Ok(ShardMethod::Matrix(FullMatrix { solver: scene.radiosity.solver }))
+    } else if !method.uses_uniform_mesh() {
+        Ok(ShardMethod::Hierarchy(Hierarchical))
     } else {
         Err(ShardError::NotMatrix { scene: scene.path.display().to_string(), method: method.name() })
     }

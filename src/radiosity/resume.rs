@@ -2,13 +2,16 @@
 //! finished so far, rewritten at most every `CHECKPOINT_INTERVAL`), the shard a run computes
 //! (`--shard K/N`: every N-th group of receivers) and the parts a merge joins (`--merge`). All of
 //! them are row-block files (`matrix::rows_file`), checked against the scene's keys. A hierarchical
-//! solve's checkpoint is its log of link estimates in the same container (`hierarchy::links_file`).
+//! solve's checkpoint is its log of link estimates in the same container (`hierarchy::links_file`),
+//! and so are its shard parts (`hierarchy::part_file`).
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::hierarchy::estimates::{EstimateLog, LoggedEstimate};
 use super::hierarchy::links_file;
+use super::hierarchy::part_file::{self, HierarchyPart};
+use super::hierarchy::shards::SharedEstimate;
 use super::matrix::rows_file::{self, RowsFileError, RowsHeader, RowsKind};
 use super::matrix::{FormFactors, PartialRows};
 use crate::interrupt::Cancel;
@@ -60,7 +63,7 @@ impl Resume {
         self.shard.unwrap_or(Shard::WHOLE)
     }
 
-    /// Whether the run needs the stored matrix (a shard or a merge).
+    /// Whether the run shards or merges (the stored matrix or the hierarchy, `method::shard_method`).
     pub fn needs_matrix(&self) -> bool {
         self.shard.is_some() || !self.merge.is_empty()
     }
@@ -251,19 +254,41 @@ pub enum ShardError {
     ElementCounts,
     #[error("--merge needs at least one part")]
     NoParts,
+    #[error("the parts of refinement pass {pass} are missing (the parts go up to pass {passes}); run its shards with the parts of the passes before it")]
+    MissingPass { pass: u32, passes: u32 },
+    #[error("the parts hold all {passes} refinement passes of this scene; merge them without --shard")]
+    EveryPassDone { passes: u32 },
+    #[error("--shard with --merge shards a later refinement pass of the hierarchical method; the matrix method shards in one round")]
+    MatrixRounds,
     #[error("{}: incomplete: {missing} of its rows are missing", path.display())]
     Incomplete { path: PathBuf, missing: usize },
-    #[error("{scene}: sharding and merging need the stored matrix ([radiosity] method = \"matrix\", store_form_factors = true); this scene uses {method}")]
+    #[error("{scene}: sharding and merging need the stored matrix ([radiosity] method = \"matrix\", store_form_factors = true) or the hierarchy; this scene uses {method}")]
     NotMatrix { scene: String, method: String },
 }
 
-/// Joins the parts of a sharded pass one: every part must be a finished shard part of this scene,
-/// all of the same count N, each K in 0..N exactly once, and together they must hold every row.
-pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, ShardError> {
-    let mut parts: Vec<(PathBuf, RowsHeader, PartialRows)> = Vec::with_capacity(paths.len());
-    for path in paths {
-        let (header, rows) = rows_file::read(path)?;
-        if header.kind != RowsKind::ShardPart {
+/// The parts at `paths` as `read` finds them.
+fn read_parts<T>(
+    paths: &[PathBuf],
+    read: impl Fn(&Path) -> Result<(RowsHeader, T), RowsFileError>,
+) -> Result<Vec<(PathBuf, RowsHeader, T)>, ShardError> {
+    paths
+        .iter()
+        .map(|path| read(path).map(|(header, payload)| (path.clone(), header, payload)))
+        .collect::<Result<_, _>>()
+        .map_err(ShardError::from)
+}
+
+/// Checks parts: every one a `kind` part of this scene, all of the same count N, each K in 0..N
+/// exactly once.
+fn checked_parts<T>(
+    read: Vec<(PathBuf, RowsHeader, T)>,
+    keys: SceneKeys,
+    kind: RowsKind,
+) -> Result<Vec<(PathBuf, RowsHeader, T)>, ShardError> {
+    let mut parts: Vec<(PathBuf, RowsHeader, T)> = Vec::with_capacity(read.len());
+    for (path, header, payload) in read {
+        let path = &path;
+        if header.kind != kind {
             return Err(ShardError::NotAPart { path: path.clone() });
         }
         if header.fingerprint != keys.fingerprint || header.form_factor_key != keys.form_factor_key {
@@ -291,13 +316,20 @@ pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, Sh
                 second: path.clone(),
             });
         }
-        parts.push((path.clone(), header, rows));
+        parts.push((path.clone(), header, payload));
     }
     let count = parts.first().ok_or(ShardError::NoParts)?.1.shard_count;
     let missing: Vec<u32> = (0..count).filter(|k| !parts.iter().any(|(_, h, _)| h.shard_index == *k)).collect();
     if !missing.is_empty() {
         return Err(ShardError::Missing { missing, count });
     }
+    Ok(parts)
+}
+
+/// Joins the parts of a sharded pass one: every part must be a finished shard part of this scene,
+/// all of the same count N, each K in 0..N exactly once, and together they must hold every row.
+pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, ShardError> {
+    let parts = checked_parts(read_parts(paths, rows_file::read)?, keys, RowsKind::ShardPart)?;
     for (path, header, rows) in &parts {
         let shard = Shard { index: header.shard_index, count: header.shard_count };
         let missing = (0..rows.len()).filter(|&i| shard.selects(i) && !rows.done[i]).count();
@@ -307,6 +339,44 @@ pub fn merge_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<PartialRows, Sh
     }
     let rows: Vec<PartialRows> = parts.into_iter().map(|(_, _, rows)| rows).collect();
     PartialRows::union(&rows).ok_or(ShardError::ElementCounts)
+}
+
+/// The link estimates of a sharded hierarchical solve: the parts of passes 1..=P, each pass's
+/// checked like `merge_parts`'s rows (every part of this scene and settings, each shard once), and
+/// no pass missing below P. Returns P and all parts' entries in one list.
+pub fn merge_hierarchy_parts(paths: &[PathBuf], keys: SceneKeys) -> Result<(u32, Vec<SharedEstimate>), ShardError> {
+    let mut parts = read_parts(paths, part_file::read)?;
+    let passes = parts.iter().map(|(_, _, part)| part.pass).max().ok_or(ShardError::NoParts)?;
+    let mut entries = Vec::new();
+    for pass in (1..=passes).rev() {
+        let (this, rest) = parts.into_iter().partition(|(_, _, part)| part.pass == pass);
+        parts = rest;
+        if Vec::is_empty(&this) {
+            return Err(ShardError::MissingPass { pass, passes });
+        }
+        for (_, _, part) in checked_parts(this, keys, RowsKind::HierarchyShardPart)? {
+            entries.extend(part.entries);
+        }
+    }
+    Ok((passes, entries))
+}
+
+/// Writes shard `shard`'s pure link estimates of a hierarchical refinement pass as a part for
+/// `merge_hierarchy_parts`.
+pub fn write_hierarchy_part(
+    path: &Path,
+    keys: SceneKeys,
+    shard: Shard,
+    part: &HierarchyPart,
+) -> Result<(), RowsFileError> {
+    let header = RowsHeader {
+        kind: RowsKind::HierarchyShardPart,
+        fingerprint: keys.fingerprint,
+        form_factor_key: keys.form_factor_key,
+        shard_index: shard.index,
+        shard_count: shard.count,
+    };
+    part_file::write(path, &header, part)
 }
 
 /// Writes shard `shard`'s finished rows as a part for `merge_parts`.

@@ -42,8 +42,7 @@ pub fn write_layers(
     let image = &scene.image;
     let camera = PinholeCamera::new(&scene.camera, image.width_px, image.height_px);
     let tracer = tracer_for(scene, mesh, &accel, solution, TraceMode::Final, photons, progress, stats)?;
-    let tiles = image.width_px.div_ceil(film::TILE_SIZE_PX) * image.height_px.div_ceil(film::TILE_SIZE_PX);
-    let stage = progress.stage("render layers", tiles as u64, "tiles");
+    let stages = super::film_stages::FilmStages::start(progress, "render layers", image);
     let start = Instant::now();
     let (parts, film_stats, counts) = film::render_samples_with(
         image,
@@ -52,7 +51,7 @@ pub fn write_layers(
             let ray = camera.ray(x, y);
             tracer.radiance_parts(ray.origin, ray.dir, sampler, counts)
         },
-        &|| stage.inc(1),
+        &stages,
     );
     let total: RayCounts = counts.into_iter().sum();
     stats.render_seconds += start.elapsed().as_secs_f64();
@@ -61,7 +60,8 @@ pub fn write_layers(
     stats.shadow_rays += total.shadow;
     stats.samples += film_stats.samples;
     stats.adaptive_extra_samples += film_stats.adaptive_extra_samples;
-    stage.finish(&format!("{}×{} layers", image.width_px, image.height_px));
+    stats.adaptive_pixels += film_stats.adaptive_pixels;
+    stats.adaptive_seconds += stages.finish(&format!("{}×{} layers", image.width_px, image.height_px));
     let radiosity = render(scene, mesh, &accel, solution, TraceMode::Radiosity, photons, progress, stats)?;
 
     let layer = |get: fn(&RadianceParts) -> Vec3| parts.iter().map(get).collect::<Vec<Vec3>>();

@@ -73,6 +73,7 @@ struct RawImage {
     adaptive_threshold: Option<S<f32>>,
     adaptive_error: Option<S<f32>>,
     adaptive_max_samples: Option<S<i64>>,
+    adaptive_budget: Option<S<f32>>,
     seed: Option<u64>,
     exposure: Option<S<crate::output::Exposure>>,
 }
@@ -457,6 +458,9 @@ fn image_settings(loc: &Locator, raw: Option<&RawImage>, base: ImageSettings) ->
         65536,
         s.adaptive_max_samples.max(s.samples_per_pixel),
     )?;
+    if let Some(b) = loc.ranged(&r.adaptive_budget, "adaptive_budget", |x| x >= 0.0, "a non-negative number")? {
+        s.adaptive_budget = b;
+    }
     if let Some(seed) = r.seed {
         s.seed = seed;
     }

@@ -1,5 +1,5 @@
-//! Choosing points on the emitters: which emitting triangle (an alias table by emitted power) and a
-//! uniform point on it. Pass two's shadow rays and the photons both draw from here.
+//! Choosing points on the emitters: which emitting triangle (a warp tree by emitted power, which keeps
+//! stratified points stratified over the triangles) and a uniform point on it. Pass two's shadow rays and the photons both draw from here.
 
 use glam::Vec3;
 
@@ -23,57 +23,79 @@ pub struct EmitterSample {
     pub inverse_density: f32,
 }
 
-/// Walker's alias table built by Vose's method (Walker 1977; Vose 1991): n entries with
-/// probabilities pᵢ = wᵢ / Σⱼ wⱼ, one of which is drawn in O(1) from one uniform number, whatever n.
-///
-/// Construction: scale qᵢ = n·pᵢ; while some qₛ < 1 and some q_l ≥ 1, cell s keeps qₛ and takes l as
-/// its alias, and q_l ← q_l − (1 − qₛ); cells left over keep probability 1. Selection from u ∈ [0, 1):
-/// x = n·u, cell i = ⌊x⌋, f = x − i; entry i if f < qᵢ, else alias(i). Then
-/// P(entry j) = (qⱼ + Σ_{i: alias(i) = j} (1 − qᵢ))/n = pⱼ.
+/// A balanced binary tree over weighted entries with positions, for hierarchical sample warping
+/// (McCool and Harwood 1997; Clarberg et al. 2005): each inner node splits its entries at the median
+/// of their centroids along the axis of largest extent, and keeps the probability of its left half,
+/// qₙ = W_left / (W_left + W_right). A 2-D uniform point (u, v) descends from the root: at depth d it
+/// rescales coordinate c = d mod 2, going left with c ← c/qₙ when c < qₙ, right with
+/// c ← (c − qₙ)/(1 − qₙ) otherwise. So entry i is reached with P(i) = Π qₙ along its path
+/// = wᵢ / Σⱼ wⱼ, the leftover (u, v) is uniform, and, unlike a 1-D table, neighbouring regions of the
+/// unit square land on neighbouring entries: a stratified pattern over (u, v) stays stratified over
+/// the entries' union (the triangles of one meshed lamp are sampled like the lamp itself). O(log n)
+/// per point; depth ⌈log₂ n⌉.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct AliasTable {
-    /// qᵢ, the chance that cell i keeps its own entry.
-    keep: Vec<f64>,
-    alias: Vec<u32>,
-    /// pᵢ = wᵢ / Σ w.
+pub struct WarpTree {
+    nodes: Vec<WarpNode>,
+    /// pᵢ = wᵢ / Σ w, as the product of the branch probabilities on entry i's path.
     probability: Vec<f64>,
 }
 
-impl AliasTable {
-    /// The table for weights `weights` (non-negative, finite, with a positive sum); `None` otherwise
-    /// or when empty.
-    pub fn new(weights: &[f64]) -> Option<AliasTable> {
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum WarpNode {
+    Leaf(u32),
+    Split { left_probability: f64, left: u32, right: u32 },
+}
+
+impl WarpTree {
+    /// The tree for weights `weights` (non-negative, finite, with a positive sum) at points
+    /// `centroids` (same length); `None` otherwise or when empty. Entries of zero weight are never
+    /// drawn.
+    pub fn new(weights: &[f64], centroids: &[Vec3]) -> Option<WarpTree> {
         let total: f64 = weights.iter().sum();
-        let valid = weights.iter().all(|w| w.is_finite() && *w >= 0.0);
+        let valid = weights.iter().all(|w| w.is_finite() && *w >= 0.0) && centroids.len() == weights.len();
         if weights.is_empty() || !valid || !(total.is_finite() && total > 0.0) {
             return None;
         }
-        let n = weights.len();
-        let probability: Vec<f64> = weights.iter().map(|w| w / total).collect();
-        let mut scaled: Vec<f64> = probability.iter().map(|p| p * n as f64).collect();
-        let mut keep = vec![1.0; n];
-        let mut alias: Vec<u32> = (0..n as u32).collect();
-        let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
-        while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
-            small.pop();
-            keep[s] = scaled[s];
-            alias[s] = l as u32;
-            scaled[l] -= 1.0 - scaled[s];
-            if scaled[l] < 1.0 {
-                large.pop();
-                small.push(l);
-            }
+        let mut tree = WarpTree { nodes: Vec::new(), probability: vec![0.0; weights.len()] };
+        let mut entries: Vec<u32> = (0..weights.len() as u32).collect();
+        tree.build(&mut entries, weights, centroids, 1.0);
+        Some(tree)
+    }
+
+    /// Appends the subtree over `entries` (reached with probability `reach`) and returns its index.
+    fn build(&mut self, entries: &mut [u32], weights: &[f64], centroids: &[Vec3], reach: f64) -> u32 {
+        let index = self.nodes.len() as u32;
+        if let [only] = entries {
+            self.probability[*only as usize] = reach;
+            self.nodes.push(WarpNode::Leaf(*only));
+            return index;
         }
-        // Whatever is left over (rounding) keeps its own entry with certainty: keep = 1, alias = itself.
-        Some(AliasTable { keep, alias, probability })
+        let (lo, hi) = entries.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| {
+            (lo.min(centroids[i as usize]), hi.max(centroids[i as usize]))
+        });
+        let axis = (hi - lo).max_position();
+        let mid = entries.len() / 2;
+        entries.select_nth_unstable_by(mid, |&a, &b| {
+            centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]).then(a.cmp(&b))
+        });
+        let (left, right) = entries.split_at_mut(mid);
+        let weight = |side: &[u32]| side.iter().map(|&i| weights[i as usize]).sum::<f64>();
+        let (w_left, w_right) = (weight(left), weight(right));
+        // A side of zero weight is never entered (q is 0 or 1 exactly).
+        let left_probability = if w_left + w_right > 0.0 { w_left / (w_left + w_right) } else { 0.5 };
+        self.nodes.push(WarpNode::Split { left_probability, left: 0, right: 0 });
+        let l = self.build(left, weights, centroids, reach * left_probability);
+        let r = self.build(right, weights, centroids, reach * (1.0 - left_probability));
+        self.nodes[index as usize] = WarpNode::Split { left_probability, left: l, right: r };
+        index
     }
 
     pub fn len(&self) -> usize {
-        self.keep.len()
+        self.probability.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.keep.is_empty()
+        self.probability.is_empty()
     }
 
     /// pᵢ, the probability of entry i.
@@ -81,31 +103,47 @@ impl AliasTable {
         self.probability[i]
     }
 
-    /// The entry for u ∈ [0, 1), and u's leftover precision rescaled to a fresh uniform number in
-    /// [0, 1) (f/qᵢ or (f − qᵢ)/(1 − qᵢ)), so one number both selects and places the sample.
-    pub fn select(&self, u: f32) -> (usize, f32) {
-        let n = self.keep.len();
-        let x = (u.clamp(0.0, 1.0) as f64) * n as f64;
-        let cell = (x as usize).min(n - 1);
-        let f = (x - cell as f64).clamp(0.0, 1.0);
-        let q = self.keep[cell];
-        let (entry, rest) = if f < q { (cell, f / q) } else { (self.alias[cell] as usize, (f - q) / (1.0 - q)) };
-        (entry, (rest as f32).min(ONE_BELOW))
+    /// The entry for (u, v) ∈ [0, 1)² and the point's leftover, rescaled to a fresh uniform point in
+    /// [0, 1)² (see the type's documentation).
+    pub fn select(&self, [u, v]: [f32; 2]) -> (usize, [f32; 2]) {
+        let mut c = [u.clamp(0.0, 1.0) as f64, v.clamp(0.0, 1.0) as f64];
+        let mut node = 0usize;
+        let mut depth = 0usize;
+        loop {
+            match self.nodes[node] {
+                WarpNode::Leaf(i) => {
+                    let unit = |x: f64| (x.clamp(0.0, 1.0) as f32).min(ONE_BELOW);
+                    return (i as usize, [unit(c[0]), unit(c[1])]);
+                }
+                WarpNode::Split { left_probability: q, left, right } => {
+                    let x = &mut c[depth % 2];
+                    if *x < q {
+                        *x /= q;
+                        node = left as usize;
+                    } else {
+                        *x = (*x - q) / (1.0 - q);
+                        node = right as usize;
+                    }
+                    depth += 1;
+                }
+            }
+        }
     }
 }
 
 const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// The triangles of emitting elements (by their front side's material), for direct light: a triangle
-/// is chosen in proportion to its emitted power (`AliasTable`, O(1) per sample however many emit),
-/// then a point uniformly on it.
+/// is chosen in proportion to its emitted power by warping a 2-D point down a `WarpTree` over the
+/// triangles' centroids (O(log n) per sample), then the point's leftover places it uniformly on the
+/// triangle, so stratified points stay stratified over the emitters however finely they are meshed.
 #[derive(Clone, Debug, Default)]
 pub struct Emitters {
     /// Mesh triangle of each entry, increasing.
     triangle: Vec<u32>,
     /// Aₜ/pₜ of each entry: the inverse area density of points drawn on it (scene units²).
     inverse_density: Vec<f32>,
-    table: AliasTable,
+    table: WarpTree,
     total_area: f32,
 }
 
@@ -124,6 +162,7 @@ impl Emitters {
         let mut triangle = Vec::new();
         let mut area = Vec::new();
         let mut power = Vec::new();
+        let mut centroid = Vec::new();
         for (t, tri) in mesh.triangles.iter().enumerate() {
             let front = mesh.triangle_element[t] as usize;
             if !materials[e.material[front] as usize].is_emitter() {
@@ -137,9 +176,10 @@ impl Emitters {
                 triangle.push(t as u32);
                 area.push(a);
                 power.push(phi);
+                centroid.push((p[0] + p[1] + p[2]) / 3.0);
             }
         }
-        let Some(table) = AliasTable::new(&power) else {
+        let Some(table) = WarpTree::new(&power, &centroid) else {
             return Emitters::default();
         };
         let inverse_density = area.iter().enumerate().map(|(i, a)| (a / table.probability(i)) as f32).collect();
@@ -170,14 +210,14 @@ impl Emitters {
         }
     }
 
-    /// The point for uniform numbers (ξ, r): ξ selects the triangle in proportion to its power (the
-    /// alias table) and, rescaled, the distance from its first corner; r the position across
-    /// (`uniform_triangle_point`). `None` without emitters.
+    /// The point for uniform numbers (ξ, r): the `WarpTree` selects the triangle in proportion to its
+    /// power and hands on (ξ, r) rescaled, which place the point on it (`uniform_triangle_point`).
+    /// `None` without emitters.
     pub fn sample(&self, mesh: &Mesh, xi: f32, r: f32) -> Option<EmitterSample> {
         if self.triangle.is_empty() {
             return None;
         }
-        let (i, s) = self.table.select(xi);
+        let (i, [s, r]) = self.table.select([xi, r]);
         let t = self.triangle[i];
         let corners = mesh.triangles[t as usize].map(|v| mesh.positions[v as usize]);
         Some(EmitterSample {
@@ -238,57 +278,82 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// Frequencies of each entry over a regular grid of m values of u. An entry owns at most a few
-    /// intervals of u (its own cell's kept part and the aliased parts of other cells), and each
-    /// interval's count differs from m × its length by less than 1; the bound allows 2 per cell.
-    fn frequencies(table: &AliasTable, m: usize) -> Vec<f64> {
-        let mut count = vec![0usize; table.len()];
-        for k in 0..m {
-            count[table.select(((k as f64 + 0.5) / m as f64) as f32).0] += 1;
+    /// Entries on a line, at x = i (the tree's splits follow them).
+    fn on_a_line(n: usize) -> Vec<Vec3> {
+        (0..n).map(|i| Vec3::new(i as f32, 0.5 * (i % 3) as f32, 0.0)).collect()
+    }
+
+    /// Frequencies of each entry over the m × m midpoint grid of the unit square. Every entry owns one
+    /// axis-aligned rectangle of the square (each split cuts one coordinate's interval in two), and a
+    /// rectangle's count differs from m² × its area by at most the cells its border crosses, 2m + 2.
+    fn frequencies(tree: &WarpTree, m: usize) -> Vec<f64> {
+        let mut count = vec![0usize; tree.len()];
+        for i in 0..m {
+            for j in 0..m {
+                let uv = [(i as f64 + 0.5) / m as f64, (j as f64 + 0.5) / m as f64].map(|x| x as f32);
+                count[tree.select(uv).0] += 1;
+            }
         }
-        count.iter().map(|&c| c as f64 / m as f64).collect()
+        count.iter().map(|&c| c as f64 / (m * m) as f64).collect()
     }
 
     proptest! {
         #[test]
-        fn alias_table_picks_each_entry_with_probability_power_over_total(
+        fn warp_tree_picks_each_entry_with_probability_power_over_total(
             weights in prop::collection::vec(0.0f64..100.0, 1..40),
         ) {
             prop_assume!(weights.iter().sum::<f64>() > 1e-3);
-            let table = AliasTable::new(&weights).unwrap();
+            let tree = WarpTree::new(&weights, &on_a_line(weights.len())).unwrap();
             let total: f64 = weights.iter().sum();
-            let m = 1 << 20;
-            let f = frequencies(&table, m);
-            let bound = 2.0 * weights.len() as f64 / m as f64 + 1e-6;
+            let m = 1024;
+            let f = frequencies(&tree, m);
+            let bound = (2 * m + 2) as f64 / (m * m) as f64;
             for (j, w) in weights.iter().enumerate() {
-                prop_assert!((table.probability(j) - w / total).abs() < 1e-12);
+                prop_assert!((tree.probability(j) - w / total).abs() < 1e-12);
                 prop_assert!((f[j] - w / total).abs() <= bound, "entry {}: {} vs {}", j, f[j], w / total);
             }
         }
 
         #[test]
-        fn alias_leftover_stays_in_the_unit_interval(weights in prop::collection::vec(0.1f64..10.0, 1..8)) {
-            let table = AliasTable::new(&weights).unwrap();
+        fn warp_leftover_stays_in_the_unit_square(weights in prop::collection::vec(0.1f64..10.0, 1..8)) {
+            let tree = WarpTree::new(&weights, &on_a_line(weights.len())).unwrap();
             for k in 0..1000 {
-                let (_, rest) = table.select(k as f32 / 1000.0);
-                prop_assert!((0.0..1.0).contains(&rest));
+                let (_, rest) = tree.select([k as f32 / 1000.0, (k * 7 % 1000) as f32 / 1000.0]);
+                prop_assert!(rest.iter().all(|x| (0.0..1.0).contains(x)));
             }
         }
     }
 
     #[test]
-    fn alias_table_refuses_empty_negative_and_zero_weights() {
-        assert!(AliasTable::new(&[]).is_none());
-        assert!(AliasTable::new(&[0.0, 0.0]).is_none());
-        assert!(AliasTable::new(&[1.0, -1.0]).is_none());
-        assert!(AliasTable::new(&[1.0, f64::NAN]).is_none());
+    fn warp_tree_refuses_empty_negative_and_zero_weights() {
+        assert!(WarpTree::new(&[], &[]).is_none());
+        assert!(WarpTree::new(&[0.0, 0.0], &on_a_line(2)).is_none());
+        assert!(WarpTree::new(&[1.0, -1.0], &on_a_line(2)).is_none());
+        assert!(WarpTree::new(&[1.0, f64::NAN], &on_a_line(2)).is_none());
+        assert!(WarpTree::new(&[1.0, 1.0], &on_a_line(1)).is_none());
     }
 
     #[test]
-    fn alias_leftover_of_one_entry_is_the_number_itself() {
-        let table = AliasTable::new(&[3.0]).unwrap();
-        for u in [0.0, 0.25, 0.7] {
-            assert_eq!(table.select(u), (0, u));
+    fn warp_leftover_of_one_entry_is_the_point_itself() {
+        let tree = WarpTree::new(&[3.0], &on_a_line(1)).unwrap();
+        for uv in [[0.0, 0.5], [0.25, 0.125], [0.7, 0.0]] {
+            assert_eq!(tree.select(uv), (0, uv));
+        }
+    }
+
+    /// Equal entries on a 4 × 4 grid: the 16 cells of the unit square's 4 × 4 grid land on 16
+    /// different entries (two splits per coordinate), so one stratified point per cell is one point
+    /// per entry.
+    #[test]
+    fn warp_tree_maps_strata_of_the_square_onto_distinct_entries() {
+        let centroids: Vec<Vec3> = (0..16).map(|i| Vec3::new((i % 4) as f32, (i / 4) as f32, 0.0)).collect();
+        let tree = WarpTree::new(&[1.0; 16], &centroids).unwrap();
+        let mut hit = [false; 16];
+        for i in 0..4 {
+            for j in 0..4 {
+                let (entry, _) = tree.select([(i as f32 + 0.5) / 4.0, (j as f32 + 0.5) / 4.0]);
+                assert!(!std::mem::replace(&mut hit[entry], true), "cell ({i}, {j}) repeats entry {entry}");
+            }
         }
     }
 }

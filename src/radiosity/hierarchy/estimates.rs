@@ -1,11 +1,13 @@
 //! The log of link estimates a refinement made, in the order it made them: the unit of finished work
 //! of a hierarchical solve, kept in its checkpoint (`links_file`). Refinement is deterministic given
-//! its estimates (the decisions are serial and ordered, see `refine::refine`), so a resumed solve
+//! its estimates (the decisions are applied in a fixed order, see `refine::refine_logged`), so a resumed solve
 //! replays the whole refinement, taking each estimate from the log while it lasts and computing the
 //! rest: the nodes it subdivides, their indices and the links are those of an uninterrupted run, and
 //! so are the bytes. Only the cheap parts (decisions, sweeps) are done again.
 
 use rayon::prelude::*;
+
+use super::shards::SharedEstimates;
 
 /// Which estimator produced a logged value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,11 +55,13 @@ pub const CHUNK_LINKS: usize = 4096;
 
 /// How a solve is stopped and its log saved: `stop` is polled before each chunk of estimates and
 /// between sweeps; `after_chunk` sees the log after each chunk with the number of entries it computed
-/// (a checkpoint writer, the cancellation test hook).
+/// (a checkpoint writer, the cancellation test hook). `shared`: a shard or merge of pass one
+/// (`shards`), `None` for a whole solve.
 pub struct EstimateHooks<'a> {
     pub log: &'a mut EstimateLog,
     pub stop: &'a (dyn Fn() -> bool + Sync),
     pub after_chunk: &'a mut dyn FnMut(&EstimateLog, usize),
+    pub shared: Option<&'a SharedEstimates>,
 }
 
 impl EstimateLog {
@@ -96,29 +100,14 @@ impl EstimateLog {
         }
         self.computed += 1;
     }
-
-    /// One estimate of `kind` for link (receiver ← source): logged, or `compute`d and logged.
-    pub fn one(
-        &mut self,
-        kind: EstimateKind,
-        receiver: u32,
-        source: u32,
-        compute: impl FnOnce() -> Option<(f32, f32)>,
-    ) -> Option<(f32, f32)> {
-        if let Some(value) = self.replay(kind, receiver, source) {
-            return value;
-        }
-        let value = compute();
-        self.push(kind, receiver, source, value);
-        value
-    }
 }
 
-/// `EstimateKind::Link` estimates of the links `pairs` (receiver, source), in order: each from the
-/// log while it lasts, the rest by `compute(index into pairs)` in parallel chunks of `CHUNK_LINKS`,
-/// polling `hooks.stop` before each chunk. The values do not depend on the chunking or the threads
-/// (each estimate is a pure function of its link).
+/// Estimates of `kind` of the links `pairs` (receiver, source), in order: each from the log while it
+/// lasts, the rest by `compute(index into pairs)` in parallel chunks of `CHUNK_LINKS`, polling
+/// `hooks.stop` before each chunk. The values do not depend on the chunking or the threads (each
+/// estimate is a pure function of its link).
 pub fn estimate_links(
+    kind: EstimateKind,
     pairs: &[(u32, u32)],
     compute: &(dyn Fn(usize) -> Option<(f32, f32)> + Sync),
     hooks: &mut EstimateHooks,
@@ -126,7 +115,7 @@ pub fn estimate_links(
     let mut values = Vec::with_capacity(pairs.len());
     while values.len() < pairs.len() {
         let (r, s) = pairs[values.len()];
-        if let Some(value) = hooks.log.replay(EstimateKind::Link, r, s) {
+        if let Some(value) = hooks.log.replay(kind, r, s) {
             values.push(value);
             continue;
         }
@@ -138,7 +127,7 @@ pub fn estimate_links(
         let count = computed.len();
         for (i, value) in chunk.zip(computed) {
             let (r, s) = pairs[i];
-            hooks.log.push(EstimateKind::Link, r, s, value);
+            hooks.log.push(kind, r, s, value);
             values.push(value);
         }
         (hooks.after_chunk)(hooks.log, count);
@@ -154,9 +143,10 @@ mod tests {
         let calls = std::sync::atomic::AtomicUsize::new(0);
         let stop = || stop_after.is_some_and(|n| calls.load(std::sync::atomic::Ordering::SeqCst) >= n);
         let mut after = |_: &EstimateLog, n: usize| _ = calls.fetch_add(n, std::sync::atomic::Ordering::SeqCst);
-        let mut hooks = EstimateHooks { log, stop: &stop, after_chunk: &mut after };
+        let mut hooks = EstimateHooks { log, stop: &stop, after_chunk: &mut after, shared: None };
         let compute = |i: usize| Some((pairs[i].0 as f32 * 0.5, pairs[i].1 as f32));
-        estimate_links(pairs, &compute, &mut hooks).map(|v| v.iter().map(|e| e.unwrap().0).collect())
+        estimate_links(EstimateKind::Link, pairs, &compute, &mut hooks)
+            .map(|v| v.iter().map(|e| e.unwrap().0).collect())
     }
 
     #[test]

@@ -2,6 +2,8 @@
 //! it is linked to. Stored by receiver in compressed rows; `estimate` picks the estimator by link type
 //! (see `form_factor` for which one serves which).
 
+use rayon::slice::ParallelSliceMut;
+
 use super::form_factor::{
     cluster_form_factor, cluster_form_factor_bound, element_projected_area, element_to_element, projected_area,
 };
@@ -36,7 +38,7 @@ impl Links {
     /// Rows from records, grouped by receiver; the order within a receiver is the records' order, so
     /// equal inputs give equal rows.
     pub fn from_records(node_count: usize, mut records: Vec<LinkRecord>) -> Links {
-        records.sort_by_key(|l| l.receiver);
+        records.par_sort_by_key(|l| l.receiver); // stable, like `sort_by_key`
         let mut offsets = vec![0u32; node_count + 1];
         for l in &records {
             offsets[l.receiver as usize + 1] += 1;

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use super::estimates::{EstimateKind, EstimateLog, LoggedEstimate};
-use crate::radiosity::matrix::rows_file::{self, RowsFileError, RowsHeader, RowsKind};
+use crate::radiosity::matrix::rows_file::{self, Payload, RowsFileError, RowsHeader, RowsKind};
 
 /// Bytes of one entry.
 const ENTRY_BYTES: usize = 1 + 4 + 4 + 1 + 4 + 4;
@@ -33,13 +33,7 @@ pub fn write(path: &Path, header: &RowsHeader, log: &EstimateLog) -> Result<(), 
             });
             bytes.extend_from_slice(&e.receiver.to_le_bytes());
             bytes.extend_from_slice(&e.source.to_le_bytes());
-            let (present, (f, spread)) = match e.value {
-                Some(v) => (1u8, v),
-                None => (0u8, (0.0, 0.0)),
-            };
-            bytes.push(present);
-            bytes.extend_from_slice(&f.to_bits().to_le_bytes());
-            bytes.extend_from_slice(&spread.to_bits().to_le_bytes());
+            push_value(&mut bytes, e.value);
             out.write_all(&bytes)?;
         }
         Ok(())
@@ -77,18 +71,34 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, Vec<LoggedEstimat
         };
         let receiver = r.u32()?;
         let source = r.u32()?;
-        let present = r.u8()?;
-        let f = f32::from_bits(r.u32()?);
-        let spread = f32::from_bits(r.u32()?);
-        let value = match present {
-            0 => None,
-            1 => Some((f, spread)),
-            p => return Err(r.damaged(format!("presence flag {p}"))),
-        };
+        let value = read_value(&mut r)?;
         entries.push(LoggedEstimate { kind, receiver, source, value });
     }
     r.finish()?;
     Ok((header, entries))
+}
+
+/// Appends an estimate's value: present u8 (0: `None`), form factor f32, spread f32 (9 bytes).
+pub(super) fn push_value(bytes: &mut Vec<u8>, value: Option<(f32, f32)>) {
+    let (present, (f, spread)) = match value {
+        Some(v) => (1u8, v),
+        None => (0u8, (0.0, 0.0)),
+    };
+    bytes.push(present);
+    bytes.extend_from_slice(&f.to_bits().to_le_bytes());
+    bytes.extend_from_slice(&spread.to_bits().to_le_bytes());
+}
+
+/// Reads what `push_value` wrote.
+pub(super) fn read_value(r: &mut Payload) -> Result<Option<(f32, f32)>, RowsFileError> {
+    let present = r.u8()?;
+    let f = f32::from_bits(r.u32()?);
+    let spread = f32::from_bits(r.u32()?);
+    match present {
+        0 => Ok(None),
+        1 => Ok(Some((f, spread))),
+        p => Err(r.damaged(format!("presence flag {p}"))),
+    }
 }
 
 #[cfg(test)]

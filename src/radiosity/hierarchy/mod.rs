@@ -26,10 +26,13 @@ pub mod interpolate;
 pub mod links;
 pub mod links_file;
 pub mod nodes;
+pub mod part_file;
 pub mod procedural;
 pub mod refine;
+pub mod shards;
 pub mod solve;
 pub mod texels;
+pub mod tree_path;
 pub mod visibility;
 
 use std::sync::Arc;
@@ -310,7 +313,7 @@ pub fn solve_reusing(
     on_progress: &mut dyn FnMut(HierarchyProgress),
 ) -> Result<(HierarchicalSolution, LinkStructure), HierarchyError> {
     let mut log = EstimateLog::default();
-    let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {} };
+    let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {}, shared: None };
     solve_logged(scene, textures, params, reuse, &mut hooks, on_progress)
 }
 
@@ -318,7 +321,9 @@ pub fn solve_reusing(
 /// interrupted solve of the same scene and parameters is replayed (its estimates are not computed
 /// again) and the solve ends with the bytes of an uninterrupted one. `hooks.stop` is polled between
 /// chunks of estimates and between sweeps; when it asks, this returns `HierarchyError::Stopped` with
-/// the log holding every estimate made so far (the caller's checkpoint).
+/// the log holding every estimate made so far (the caller's checkpoint). With `hooks.shared` it is a
+/// shard (runs the passes before its own whole, refines its own for its receivers and stops, that
+/// pass unswept) or a merge (the whole solve, with the shards' pure estimates; see `shards`).
 pub fn solve_logged(
     scene: &SceneDescription,
     textures: Arc<SceneTextures>,
@@ -371,9 +376,17 @@ pub fn solve_logged(
         ..Default::default()
     };
     solve::reset_to_emission(&mut nodes, root);
+    if let Some(shared) = hooks.shared {
+        shared.assign_receivers(&nodes, root);
+    }
+    // A shard (`shards`) stops after refining its pass for its receivers.
+    let shard_pass = hooks.shared.and_then(|s| s.shard_pass());
     match reuse {
         None => {
             for pass in 1..=params.refinement_passes {
+                if let Some(shared) = hooks.shared {
+                    shared.begin_pass(pass);
+                }
                 let (records, self_links) = if pass == 1 {
                     (Vec::new(), if nodes.is_cluster[root] { vec![root as u32] } else { Vec::new() })
                 } else {
@@ -392,6 +405,9 @@ pub fn solve_logged(
                 )?;
                 stats.add_refinement(pass, &outcome, outcome.error_after_w);
                 links = outcome.links;
+                if shard_pass == Some(pass) {
+                    break;
+                }
                 sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, hooks.stop, on_progress)?;
             }
         }

@@ -4,12 +4,15 @@
 //! minimum element area, or the memory budget is spent (then the coarser link is kept and the budget
 //! flag raised, never an allocation beyond it).
 
+use rayon::prelude::*;
+
 use super::estimates::{estimate_links, EstimateHooks, EstimateKind, EstimateLog, Stopped};
 use super::links::{
-    estimate, link_error_power, near_form_factor, near_push_spread, refinement_error, source_variation_power,
-    LinkRecord, Links, LINK_BYTES,
+    link_error_power, near_form_factor, near_push_spread, refinement_error, source_variation_power, LinkRecord, Links,
+    LINK_BYTES,
 };
 use super::nodes::{Nodes, NODE_BYTES};
+use super::shards::estimate_shared;
 use super::visibility::VisibilityContext;
 
 /// Settings of one refinement pass.
@@ -82,9 +85,10 @@ enum Split {
 /// are never refined, and receivers below the floor area are judged by power, which bounds the links
 /// by the scene's power over the threshold rather than by its triangle count (Sillion 1995's lazy cluster linking).
 ///
-/// Breadth-first: each round estimates its new links in parallel (pure reads of `nodes`, in a fixed
-/// order) and then decides, serially and in order, which to split, so the result is the same for any
-/// thread count.
+/// Breadth-first: each round decides for all its links in parallel (`decide`, pure reads of `nodes`),
+/// applies the decisions in link order (budget, subdivisions, new links), and then estimates the
+/// kept links that still lack a form factor and the new links, in parallel and in a fixed order, so
+/// the result is the same for any thread count.
 ///
 /// Every estimate goes through `hooks.log` (`estimates`): taken from it while it lasts (a resumed
 /// solve), else computed and appended, so the same log replays to the same links. Stops with the log
@@ -112,50 +116,61 @@ pub fn refine_logged(
         let first_piece = nodes.len();
         // The links of this round still to be decided count against the budget too.
         let work_len = work.len();
-        for link in work.drain(..) {
-            let (r, s) = (link.receiver as usize, link.source as usize);
-            if !(refinement_error(nodes, &link) > settings.allowed_error_w(nodes.area[r])) {
-                keep(nodes, ctx, link, &mut kept, hooks.log);
-                continue;
+        // Every decision reads only what the round started with (see `decide`), so they are made in
+        // parallel and applied below in link order.
+        let decisions: Vec<Decision> = {
+            let nodes: &Nodes = nodes;
+            work.par_iter().with_min_len(1024).map(|link| decide(nodes, link, settings)).collect()
+        };
+        // Kept near links still without a form factor (positions in `kept`), estimated after the loop.
+        let mut unestimated: Vec<usize> = Vec::new();
+        let mut keep = |link: LinkRecord, kept: &mut Vec<LinkRecord>| {
+            if link.form_factor.is_nan() {
+                unestimated.push(kept.len());
             }
-            if r == s {
-                // A cluster's self-link: the pairs of its children, each child's own self-link included.
-                let children = nodes.children(r);
-                let bytes = budget_bytes(nodes.len(), kept.len() + next.len() + children.len().pow(2) + work_len);
-                if bytes > settings.budget_bytes {
-                    out.budget_exceeded = true;
-                    keep(nodes, ctx, link, &mut kept, hooks.log);
+            kept.push(link);
+        };
+        for (link, decision) in work.drain(..).zip(decisions) {
+            let r = link.receiver as usize;
+            let side = match decision {
+                Decision::Keep => {
+                    keep(link, &mut kept);
                     continue;
                 }
-                out.peak_bytes = out.peak_bytes.max(bytes);
-                let parent_area = nodes.area[r] as f64;
-                for i in children.clone() {
-                    for j in children.clone() {
-                        if i == j && !nodes.is_cluster[i] {
-                            continue; // a flat element does not see itself
-                        }
-                        let share = (link.spread as f64 * nodes.area[j] as f64 / parent_area) as f32;
-                        next.push(Pending { receiver: i as u32, source: j as u32, spread_cap: share });
+                Decision::Split(side) => side,
+                Decision::Expand => {
+                    // A cluster's self-link: the pairs of its children, each child's own self-link included.
+                    let children = nodes.children(r);
+                    let bytes = budget_bytes(nodes.len(), kept.len() + next.len() + children.len().pow(2) + work_len);
+                    if bytes > settings.budget_bytes {
+                        out.budget_exceeded = true;
+                        keep(link, &mut kept);
+                        continue;
                     }
+                    out.peak_bytes = out.peak_bytes.max(bytes);
+                    let parent_area = nodes.area[r] as f64;
+                    for i in children.clone() {
+                        for j in children.clone() {
+                            if i == j && !nodes.is_cluster[i] {
+                                continue; // a flat element does not see itself
+                            }
+                            let share = (link.spread as f64 * nodes.area[j] as f64 / parent_area) as f32;
+                            next.push(Pending { receiver: i as u32, source: j as u32, spread_cap: share });
+                        }
+                    }
+                    continue;
                 }
-                continue;
-            }
-            let source_varies_most =
-                source_variation_power(nodes, r, s, link.form_factor) > link_error_power(nodes, r, s, link.spread);
-            let Some(side) = choose_split(nodes, r, s, settings.min_element_area, source_varies_most) else {
-                keep(nodes, ctx, link, &mut kept, hooks.log);
-                continue;
             };
             let split = match side {
                 Split::Receiver => r,
-                Split::Source => s,
+                Split::Source => link.source as usize,
             };
             let new_nodes = if nodes.is_leaf(split) { 4 } else { 0 };
             let child_links = if nodes.is_leaf(split) { 4 } else { nodes.children(split).len() };
             let bytes = budget_bytes(nodes.len() + new_nodes, kept.len() + next.len() + child_links + work_len);
             if bytes > settings.budget_bytes {
                 out.budget_exceeded = true;
-                keep(nodes, ctx, link, &mut kept, hooks.log);
+                keep(link, &mut kept);
                 continue;
             }
             out.peak_bytes = out.peak_bytes.max(bytes);
@@ -176,7 +191,12 @@ pub fn refine_logged(
                 }
             }
         }
+        estimate_kept_near(nodes, ctx, &mut kept, &unestimated, hooks)?;
         nodes.assign_texture_means(first_piece);
+        if let Some(shared) = hooks.shared {
+            // A shard of pass one refines only its own receivers' links (`shards`).
+            next.retain(|p| shared.refines_receiver(nodes, p.receiver as usize));
+        }
         if next.is_empty() {
             break;
         }
@@ -186,13 +206,17 @@ pub fn refine_logged(
         let estimates: Vec<Option<(f32, f32)>> = {
             let nodes: &Nodes = nodes;
             let pairs: Vec<(u32, u32)> = next.iter().map(|p| (p.receiver, p.source)).collect();
+            let shared = hooks.shared;
             let compute = |i: usize| {
                 let p = &next[i];
                 let (r, s) = (p.receiver as usize, p.source as usize);
-                estimate(nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
+                estimate_shared(shared, nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
             };
-            estimate_links(&pairs, &compute, hooks)?
+            estimate_links(EstimateKind::Link, &pairs, &compute, hooks)?
         };
+        if let Some(shared) = hooks.shared {
+            shared.record(nodes, next.iter().map(|p| (p.receiver, p.source, p.spread_cap)), &estimates);
+        }
         work = next
             .iter()
             .zip(estimates)
@@ -217,35 +241,79 @@ pub fn refine(
     on_round: &mut dyn FnMut(u32, usize, usize),
 ) -> RefineOutcome {
     let mut log = EstimateLog::default();
-    let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {} };
+    let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {}, shared: None };
     match refine_logged(nodes, ctx, records, self_links, settings, &mut hooks, on_round) {
         Ok(outcome) => outcome,
         Err(Stopped) => unreachable!("never stopped"),
     }
 }
 
-/// Keeps `link`; a near link that was not estimated (it was expected to split, but cannot or may not)
-/// gets its form factor now, and is dropped if its ends cannot exchange light.
-/// The form factor goes through `log` like every estimate.
-fn keep(
+/// What refinement does with one link this round.
+enum Decision {
+    Keep,
+    /// Replace a cluster's self-link by the links between its children.
+    Expand,
+    Split(Split),
+}
+
+/// The decision for `link` from the state the round started with: kept while its `refinement_error`
+/// is within the allowed error, else expanded (a self-link) or split at the end `choose_split` picks,
+/// kept when nothing can be split. A pure read of `nodes`: the splits made earlier in the same round
+/// only add children, which inherit their parent's exitance, to leaf elements, and neither that
+/// (source variation 0, like a leaf's) nor the subdivision itself (made only where `choose_split`
+/// allowed it) changes any decision, so deciding all links of a round at once and in parallel gives
+/// the decisions of a loop that decides one link at a time. Only the memory budget depends on the order; it is checked
+/// when the decisions are applied, in link order.
+fn decide(nodes: &Nodes, link: &LinkRecord, settings: &RefineSettings) -> Decision {
+    let (r, s) = (link.receiver as usize, link.source as usize);
+    if !(refinement_error(nodes, link) > settings.allowed_error_w(nodes.area[r])) {
+        return Decision::Keep;
+    }
+    if r == s {
+        return Decision::Expand;
+    }
+    let source_varies_most =
+        source_variation_power(nodes, r, s, link.form_factor) > link_error_power(nodes, r, s, link.spread);
+    match choose_split(nodes, r, s, settings.min_element_area, source_varies_most) {
+        Some(side) => Decision::Split(side),
+        None => Decision::Keep,
+    }
+}
+
+/// Gives the kept near links at positions `unestimated` of `kept` (kept without a form factor: they
+/// were expected to split, but cannot or may not) their form factor, `links::near_form_factor` plus
+/// `near_push_spread`, in parallel and in order through the log like every estimate, with the nodes
+/// as the round left them; drops those whose ends cannot exchange light.
+fn estimate_kept_near(
     nodes: &Nodes,
     ctx: &VisibilityContext,
-    mut link: LinkRecord,
     kept: &mut Vec<LinkRecord>,
-    log: &mut EstimateLog,
-) {
-    if link.form_factor.is_nan() {
-        let (r, s) = (link.receiver as usize, link.source as usize);
-        let near = || near_form_factor(nodes, ctx, r, s).map(|f| (f, near_push_spread(nodes, ctx, r, s, f)));
-        match log.one(EstimateKind::KeptNear, link.receiver, link.source, near) {
+    unestimated: &[usize],
+    hooks: &mut EstimateHooks,
+) -> Result<(), Stopped> {
+    if unestimated.is_empty() {
+        return Ok(());
+    }
+    let pairs: Vec<(u32, u32)> = unestimated.iter().map(|&k| (kept[k].receiver, kept[k].source)).collect();
+    let compute = |i: usize| {
+        let (r, s) = (pairs[i].0 as usize, pairs[i].1 as usize);
+        near_form_factor(nodes, ctx, r, s).map(|f| (f, near_push_spread(nodes, ctx, r, s, f)))
+    };
+    let values = estimate_links(EstimateKind::KeptNear, &pairs, &compute, hooks)?;
+    let mut dropped = false;
+    for (&k, value) in unestimated.iter().zip(values) {
+        match value {
             Some((f, push)) => {
-                link.form_factor = f;
-                link.spread += push;
+                kept[k].form_factor = f;
+                kept[k].spread += push;
             }
-            None => return,
+            None => dropped = true, // stays NaN: every other kept link has its form factor by now
         }
     }
-    kept.push(link);
+    if dropped {
+        kept.retain(|l| !l.form_factor.is_nan());
+    }
+    Ok(())
 }
 
 /// Bytes `nodes` nodes and `links` link records take: each node also costs its row offset in `Links`.

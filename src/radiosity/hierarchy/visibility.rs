@@ -5,6 +5,7 @@ use glam::{DVec3, Vec3};
 
 use super::form_factor::point_to_polygon;
 use super::nodes::Nodes;
+use super::tree_path::path_hash;
 use crate::accel::Accel;
 use crate::rng::{splitmix64, Pcg32};
 
@@ -18,10 +19,11 @@ pub struct VisibilityContext<'a> {
     pub seed: u64,
 }
 
-/// A seed for link (receiver, source): a hash of the two node indices and the solve's seed, so a
-/// link's rays never depend on which thread estimates it or when.
-pub fn link_seed(seed: u64, receiver: u32, source: u32) -> u64 {
-    splitmix64(seed ^ splitmix64(((receiver as u64) << 32) | source as u64))
+/// A seed for link (receiver, source): a hash of the two nodes' tree paths (`tree_path`) and the
+/// solve's seed, so a link's rays never depend on which thread estimates it, when, or in which order
+/// the hierarchy was subdivided (a shard of pass one numbers its pieces otherwise than a whole solve).
+pub fn link_seed(seed: u64, nodes: &Nodes, receiver: usize, source: usize) -> u64 {
+    splitmix64(seed ^ splitmix64(path_hash(nodes, receiver) ^ splitmix64(path_hash(nodes, source) ^ 0x5e)))
 }
 
 /// What the rays of one link measured (see `link_visibility`).
@@ -49,7 +51,7 @@ pub struct Visibility {
 /// `offset` off its surface towards the other.
 pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, source: usize) -> Visibility {
     let n = ctx.rays.max(1);
-    let mut rng = Pcg32::new(link_seed(ctx.seed, receiver as u32, source as u32), 0);
+    let mut rng = Pcg32::new(link_seed(ctx.seed, nodes, receiver, source), 0);
     let shift = rng.next_u32() % n;
     let (mut visible, mut facing) = (0u32, 0u32);
     for attempt in 0..4 * n {
@@ -116,7 +118,7 @@ pub fn triangle_point(t: &[Vec3; 3], u: f32, v: f32) -> Vec3 {
 /// (a convex object's own cluster, a flat cluster), and the link can be dropped.
 pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, source: usize) -> (f64, u32) {
     let n = 2 * ctx.rays.max(1);
-    let mut rng = Pcg32::new(link_seed(ctx.seed ^ 0x5eed_f0f0, receiver as u32, source as u32), 0);
+    let mut rng = Pcg32::new(link_seed(ctx.seed ^ 0x5eed_f0f0, nodes, receiver, source), 0);
     let shift = rng.next_u32() % n;
     let (mut sum, mut facing) = (0.0f64, 0u32);
     for k in 0..n {

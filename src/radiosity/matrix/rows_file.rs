@@ -32,6 +32,8 @@ pub enum RowsKind {
     ShardPart,
     /// A hierarchical solve's checkpoint: its log of link estimates (`hierarchy::links_file`).
     HierarchyCheckpoint,
+    /// One shard's pure link estimates of a hierarchical pass one (`hierarchy::part_file`).
+    HierarchyShardPart,
 }
 
 impl RowsKind {
@@ -40,6 +42,7 @@ impl RowsKind {
             RowsKind::Checkpoint => 0,
             RowsKind::ShardPart => 1,
             RowsKind::HierarchyCheckpoint => 2,
+            RowsKind::HierarchyShardPart => 3,
         }
     }
 
@@ -49,7 +52,13 @@ impl RowsKind {
             RowsKind::Checkpoint => "a form-factor checkpoint",
             RowsKind::ShardPart => "a form-factor shard part",
             RowsKind::HierarchyCheckpoint => "a hierarchical solve's checkpoint (link estimates)",
+            RowsKind::HierarchyShardPart => "a hierarchical shard part (link estimates)",
         }
+    }
+
+    /// Whether files of this kind hold matrix rows (`read`, `write_rows`).
+    pub fn holds_rows(self) -> bool {
+        matches!(self, RowsKind::Checkpoint | RowsKind::ShardPart)
     }
 }
 
@@ -101,7 +110,7 @@ pub fn write_rows(
     elements: usize,
 ) -> Result<(), RowsFileError> {
     assert!(done.len() <= elements && ff.len() == done.len(), "a prefix of the matrix's rows");
-    if header.kind == RowsKind::HierarchyCheckpoint {
+    if !header.kind.holds_rows() {
         return Err(RowsFileError::WrongKind { path: path.to_path_buf(), found: header.kind, expected: "rows" });
     }
     write_container(path, header, &mut |out| {
@@ -174,7 +183,7 @@ pub fn read(path: &Path) -> Result<(RowsHeader, PartialRows), RowsFileError> {
 /// `read` over bytes already in memory; `path` names them in errors.
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, PartialRows), RowsFileError> {
     let (header, mut r) = parse_container(path, bytes)?;
-    if header.kind == RowsKind::HierarchyCheckpoint {
+    if !header.kind.holds_rows() {
         return Err(RowsFileError::WrongKind { path: path.to_path_buf(), found: header.kind, expected: "rows" });
     }
     let body = r.bytes;
@@ -248,6 +257,7 @@ pub fn parse_container<'a>(path: &'a Path, bytes: &'a [u8]) -> Result<(RowsHeade
         0 => RowsKind::Checkpoint,
         1 => RowsKind::ShardPart,
         2 => RowsKind::HierarchyCheckpoint,
+        3 => RowsKind::HierarchyShardPart,
         k => return Err(r.damaged(format!("unknown kind {k}"))),
     };
     let fingerprint = r.u64()?;

@@ -15,7 +15,7 @@ pub mod rays;
 pub use cache::{IrradianceCache, IrradianceRecord};
 pub use hemisphere::{HemisphereEstimate, Strata};
 pub use near::NearBounce;
-pub use prepass::{fill, PrepassStats};
+pub use prepass::{fill, PrepassStats, LEVELS};
 
 use glam::Vec3;
 
@@ -25,13 +25,15 @@ use crate::trace::camera::PinholeCamera;
 use crate::trace::whitted::{RayCounts, Tracer};
 
 /// The final gather for one image through `camera` as `params` ask: strata for `gather_rays`, and
-/// unless `cache_accuracy` is 0 the cache filled by `prepass::fill` (seeded by the image's seed).
+/// unless `cache_accuracy` is 0 the cache filled by `prepass::fill` (seeded by the image's seed),
+/// which calls `on_level_done` after each level.
 pub fn for_image(
     tracer: &Tracer,
     camera: &PinholeCamera,
     params: &RenderParams,
     image: &ImageSettings,
     pixel_angle_rad: f32,
+    on_level_done: &(dyn Fn(usize) + Sync),
 ) -> (FinalGather, PrepassStats) {
     let strata = Strata::for_rays(params.gather_rays);
     if params.cache_accuracy <= 0.0 {
@@ -46,6 +48,7 @@ pub fn for_image(
         strata,
         params.cache_accuracy,
         image.seed,
+        on_level_done,
     );
     (FinalGather { strata, cache: Some(cache) }, stats)
 }

@@ -16,7 +16,9 @@ use crate::transport::ray_stack::RayStack;
 use crate::transport::scatter::scatter;
 
 /// Grid spacings of the levels, in pixels.
-const LEVEL_SPACINGS_PX: [u32; 6] = [32, 16, 8, 4, 2, 1];
+const LEVEL_SPACINGS_PX: [u32; LEVELS] = [32, 16, 8, 4, 2, 1];
+/// How many levels the prepass fills (its progress steps).
+pub const LEVELS: usize = 6;
 /// Specular bounces followed from the camera to find the diffuse points behind mirrors and glass.
 const CANDIDATE_SPECULAR_DEPTH: u32 = 4;
 const CANDIDATE_STACK: usize = CANDIDATE_SPECULAR_DEPTH as usize + 2;
@@ -49,6 +51,7 @@ pub struct PrepassStats {
 
 /// The cache for one image of `width_px` × `height_px` through `camera` (a pixel subtends
 /// `pixel_angle_rad`), gathering `strata` at accuracy a = `accuracy`, random numbers from `seed`.
+/// `on_level_done(records)` is called after each of the [`LEVELS`] levels with the records so far.
 #[allow(clippy::too_many_arguments)]
 pub fn fill(
     tracer: &Tracer,
@@ -59,6 +62,7 @@ pub fn fill(
     strata: Strata,
     accuracy: f32,
     seed: u64,
+    on_level_done: &(dyn Fn(usize) + Sync),
 ) -> (IrradianceCache, PrepassStats) {
     let mut cache = IrradianceCache::new(accuracy);
     let mut stats = PrepassStats::default();
@@ -100,6 +104,7 @@ pub fn fill(
         }
         stats.candidates += found.iter().map(|(p, _)| p.len()).sum::<usize>();
         cache.index();
+        on_level_done(cache.len());
     }
     stats.records = cache.len();
     (cache, stats)
