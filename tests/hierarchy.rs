@@ -9,7 +9,9 @@ use glam::{DVec3, Vec3};
 use proptest::prelude::*;
 use radray::radiosity::hierarchy::form_factor::{element_to_element, point_to_polygon};
 use radray::radiosity::hierarchy::nodes::Nodes;
-use radray::radiosity::hierarchy::{self, clusters, gather, refine, solve as hsolve, HierarchyError, HierarchyParams};
+use radray::radiosity::hierarchy::{
+    self, clusters, gather, links, refine, solve as hsolve, HierarchyError, HierarchyParams,
+};
 use radray::scene::{
     self, Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SourceLoc, Surface,
 };
@@ -349,6 +351,42 @@ fn refinement_never_makes_the_error_estimate_grow() {
     }
 }
 
+/// No near link with a cluster end is kept while it carries light (`links::must_split`): its transfer
+/// would be pushed to (or pulled from) members whose form factors and visibility differ, the push leak
+/// that made gap_room and the two-room leak worse with the unbiased near estimator. Checked on the
+/// Cornell box after a first solve and a second, finer pass (the first pass sees only the lamp lit).
+#[test]
+fn no_lit_near_link_with_a_cluster_end_is_kept() {
+    let scene = load_scene("cornell_box.toml");
+    let (mut nodes, root, _inputs, tracing) = clusters::build(&scene).unwrap();
+    let root = root as usize;
+    let accel = radray::accel::Accel::build(&tracing.positions, &tracing.triangles);
+    let ctx =
+        hierarchy::visibility::VisibilityContext { accel: &accel, rays: 4, offset: scene.diagonal() * 1e-5, seed: 1 };
+    hsolve::reset_to_emission(&mut nodes, root);
+    let mut settings = refine::RefineSettings {
+        threshold: 0.3 * 0.22,
+        floor_area: (scene.diagonal() / 100.0).powi(2),
+        min_element_area: (scene.diagonal() / 100.0).powi(2),
+        budget_bytes: 1 << 30,
+    };
+    let first = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {});
+    hsolve::solve(&mut nodes, &first.links, root, 1.0, 1e-3, 100, &mut |_, _| {});
+    settings.threshold *= 0.5;
+    let out = refine::refine(&mut nodes, &ctx, first.links.to_records(), Vec::new(), &settings, &mut |_, _, _| {});
+    assert!(!out.budget_exceeded);
+    let records = out.links.to_records();
+    let clustered =
+        records.iter().filter(|l| nodes.is_cluster[l.receiver as usize] || nodes.is_cluster[l.source as usize]);
+    assert!(clustered.count() > 0, "the box keeps far links with a cluster end");
+    for l in &records {
+        let (r, s) = (l.receiver as usize, l.source as usize);
+        let clustered = nodes.is_cluster[r] || nodes.is_cluster[s];
+        let lit = nodes.reflectance_max[r] > 0.0 && nodes.exitance_mean[s] > 0.0;
+        assert!(!(clustered && lit && links::is_near(&nodes, r, s)), "kept near link {r} <- {s}: {l:?}");
+    }
+}
+
 /// Mean exitance per input surface on the Cornell box, hierarchy against the full-matrix hemicube
 /// solver (25 mm elements, 128² hemicubes). The floor under the blocks is left out of both means: the
 /// blocks have no bottoms, and a hemicube there sees the light through the blocks' back faces (the
@@ -575,8 +613,14 @@ fn two_rooms_through_a_wall(grid: u32) -> (SceneDescription, Vec<bool>) {
 /// happened not to sample the hidden part (V = 1). Exact zero needs the issue's "refine where
 /// visibility is partial" independent of the power threshold for cluster receivers, or a cluster
 /// push that distributes by each child's own visibility.
+///
+/// Session 8 (branch hleak, main merged with the unbiased near estimator): 0.293 W of 87.8 W at the
+/// preview threshold before; near links with a cluster end are no longer kept while they carry light
+/// (`links::must_split`): 0.284 W when only cluster receivers were forced, 0.103 W of 88.0 W with both
+/// ends. What is left comes through far links with a partly hidden cluster end (V averaged over the
+/// members, one value pushed or pulled), kept because each is under the threshold.
 #[test]
-#[ignore = "0.064 W of 83.0 W still leaks at the preview threshold (0.151 W before push_spread); see doc comment"]
+#[ignore = "0.103 W of 88.0 W still leaks at the preview threshold (0.293 W before must_split); see doc comment"]
 fn light_does_not_leak_through_a_wall_into_a_dark_room() {
     let (scene, dark) = two_rooms_through_a_wall(4);
     for params in [HierarchyParams::preview(), HierarchyParams::default()] {
