@@ -315,12 +315,9 @@ fn a_cluster_receiver_pushes_a_far_link_to_the_members_facing_it() {
     assert_eq!(total[wall], DVec3::ZERO);
 }
 
-/// Refinement at a fixed exitance never raises the summed error estimate Σ ρ_R A_R B_S ΔF: a child
-/// link's spread is capped by its parent's share. Checked over a run of passes with thresholds
-/// falling by 2× each on the Cornell box, with the exitance of a first solve. Tolerance: the sums are
-/// f64 over ≤ 10⁶ terms, 1e-9 relative.
-#[test]
-fn refinement_never_makes_the_error_estimate_grow() {
+/// The Cornell box refined at a coarse threshold, solved, then refined `passes` more times with the
+/// threshold halved each time (at that exitance); `each(pass, nodes, outcome)` sees every later pass.
+fn refine_cornell_passes(passes: usize, mut each: impl FnMut(usize, &Nodes, &refine::RefineOutcome)) {
     let scene = load_scene("cornell_box.toml");
     let (mut nodes, root, _inputs, tracing) = clusters::build(&scene).unwrap();
     let root = root as usize;
@@ -337,9 +334,21 @@ fn refinement_never_makes_the_error_estimate_grow() {
     let first = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {});
     hsolve::solve(&mut nodes, &first.links, root, 1.0, 1e-3, 100, &mut |_, _| {});
     let mut links = first.links;
-    for pass in 0..5 {
+    for pass in 0..passes {
         settings.threshold *= 0.5;
         let out = refine::refine(&mut nodes, &ctx, links.to_records(), Vec::new(), &settings, &mut |_, _, _| {});
+        each(pass, &nodes, &out);
+        links = out.links;
+    }
+}
+
+/// Refinement at a fixed exitance never raises the summed error estimate Σ ρ_R A_R B_S ΔF: a child
+/// link's spread is capped by its parent's share. Checked over a run of passes with thresholds
+/// falling by 2× each on the Cornell box, with the exitance of a first solve. Tolerance: the sums are
+/// f64 over ≤ 10⁶ terms, 1e-9 relative.
+#[test]
+fn refinement_never_makes_the_error_estimate_grow() {
+    refine_cornell_passes(5, |pass, _, out| {
         println!(
             "pass {pass}: error {:.6e} → {:.6e} W, {} links",
             out.error_before_w,
@@ -347,8 +356,7 @@ fn refinement_never_makes_the_error_estimate_grow() {
             out.links.len()
         );
         assert!(out.error_after_w <= out.error_before_w * (1.0 + 1e-9), "pass {pass}: {out:?}");
-        links = out.links;
-    }
+    });
 }
 
 /// No near link with a cluster end is kept while it carries light (`links::must_split`): its transfer
@@ -357,34 +365,19 @@ fn refinement_never_makes_the_error_estimate_grow() {
 /// Cornell box after a first solve and a second, finer pass (the first pass sees only the lamp lit).
 #[test]
 fn no_lit_near_link_with_a_cluster_end_is_kept() {
-    let scene = load_scene("cornell_box.toml");
-    let (mut nodes, root, _inputs, tracing) = clusters::build(&scene).unwrap();
-    let root = root as usize;
-    let accel = radray::accel::Accel::build(&tracing.positions, &tracing.triangles);
-    let ctx =
-        hierarchy::visibility::VisibilityContext { accel: &accel, rays: 4, offset: scene.diagonal() * 1e-5, seed: 1 };
-    hsolve::reset_to_emission(&mut nodes, root);
-    let mut settings = refine::RefineSettings {
-        threshold: 0.3 * 0.22,
-        floor_area: (scene.diagonal() / 100.0).powi(2),
-        min_element_area: (scene.diagonal() / 100.0).powi(2),
-        budget_bytes: 1 << 30,
-    };
-    let first = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {});
-    hsolve::solve(&mut nodes, &first.links, root, 1.0, 1e-3, 100, &mut |_, _| {});
-    settings.threshold *= 0.5;
-    let out = refine::refine(&mut nodes, &ctx, first.links.to_records(), Vec::new(), &settings, &mut |_, _, _| {});
-    assert!(!out.budget_exceeded);
-    let records = out.links.to_records();
-    let clustered =
-        records.iter().filter(|l| nodes.is_cluster[l.receiver as usize] || nodes.is_cluster[l.source as usize]);
-    assert!(clustered.count() > 0, "the box keeps far links with a cluster end");
-    for l in &records {
-        let (r, s) = (l.receiver as usize, l.source as usize);
-        let clustered = nodes.is_cluster[r] || nodes.is_cluster[s];
-        let lit = nodes.reflectance_max[r] > 0.0 && nodes.exitance_mean[s] > 0.0;
-        assert!(!(clustered && lit && links::is_near(&nodes, r, s)), "kept near link {r} <- {s}: {l:?}");
-    }
+    refine_cornell_passes(1, |_, nodes, out| {
+        assert!(!out.budget_exceeded);
+        let records = out.links.to_records();
+        let clustered =
+            records.iter().filter(|l| nodes.is_cluster[l.receiver as usize] || nodes.is_cluster[l.source as usize]);
+        assert!(clustered.count() > 0, "the box keeps far links with a cluster end");
+        for l in &records {
+            let (r, s) = (l.receiver as usize, l.source as usize);
+            let clustered = nodes.is_cluster[r] || nodes.is_cluster[s];
+            let lit = nodes.reflectance_max[r] > 0.0 && nodes.exitance_mean[s] > 0.0;
+            assert!(!(clustered && lit && links::is_near(nodes, r, s)), "kept near link {r} <- {s}: {l:?}");
+        }
+    });
 }
 
 /// Mean exitance per input surface on the Cornell box, hierarchy against the full-matrix hemicube
