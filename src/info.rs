@@ -2,7 +2,8 @@
 //! solved, with the suspicious geometry that usually causes light leaks.
 
 use crate::mesh;
-use crate::radiosity::{form_factors, hierarchical, hierarchy, method};
+use crate::radiosity::method::PassOneMethod;
+use crate::radiosity::{hierarchical, hierarchy, method};
 use crate::scene::{MethodChoice, SceneDescription};
 use crate::trace::back_faces::{self, BackFaceShare};
 
@@ -33,6 +34,8 @@ pub struct InfoReport {
     pub estimated_form_factor_bytes: u64,
     /// Predicted hemicube time on this machine's cores (`radiosity::form_factors::estimate`).
     pub estimated_form_factor_seconds: f64,
+    /// The same on one core: the CPU seconds `method = "auto"` compares with its limit.
+    pub estimated_form_factor_cpu_seconds: f64,
     pub warnings: Vec<String>,
     /// Share of the camera's primary hits on back faces of one-sided surfaces (`trace::back_faces`);
     /// `None` when the scene is too large to mesh.
@@ -72,13 +75,13 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
     }
     // Meshing is cheap (milliseconds for 10⁵ elements), so the estimate uses the real mesh unless the
     // element count is beyond what radray would mesh at all.
-    let (bytes, seconds, back_faces) = if elements <= crate::run::MAX_ELEMENTS {
+    let (bytes, seconds, cpu_seconds, back_faces) = if elements <= crate::run::MAX_ELEMENTS {
         let mesh = mesh::Mesh::build(scene, p.max_element_edge);
-        let e = form_factors::estimate(&mesh, p);
+        let e = method::matrix_estimate(scene, &mesh);
         let accel = crate::accel::Accel::build(&mesh.positions, &mesh.triangles);
-        (e.matrix_bytes, e.seconds, Some(back_faces::probe_scene(scene, &mesh, &accel)))
+        (e.matrix_bytes, e.seconds, e.cpu_seconds, Some(back_faces::probe_scene(scene, &mesh, &accel)))
     } else {
-        (u64::MAX, f64::INFINITY, None)
+        (u64::MAX, f64::INFINITY, f64::INFINITY, None)
     };
     InfoReport {
         scene: scene.path.display().to_string(),
@@ -92,6 +95,7 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
         emitters,
         estimated_form_factor_bytes: bytes,
         estimated_form_factor_seconds: seconds,
+        estimated_form_factor_cpu_seconds: cpu_seconds,
         warnings: scene.warnings.clone(),
         back_faces,
         geometry: crate::scene::lint::check(scene),
@@ -100,13 +104,13 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
 
 /// The method `run` will choose, with the reason for `auto` and, for the hierarchy, its input size.
 fn pass_one_method(scene: &SceneDescription) -> String {
-    let name = method::for_scene(scene).name();
-    let why = match scene.radiosity.method {
+    // `auto` meshes the scene and draws a sample of hemicubes: ask it once.
+    let (name, why) = match scene.radiosity.method {
         MethodChoice::Auto => match method::auto_prefers_hierarchy(scene) {
-            Some(reason) => format!(" (auto: {reason})"),
-            None => " (auto: the uniform mesh fits)".to_string(),
+            Some(reason) => (hierarchical::Hierarchical.name(), format!(" (auto: {reason})")),
+            None => (method::for_params(&scene.radiosity).name(), " (auto: the uniform mesh fits)".to_string()),
         },
-        _ => String::new(),
+        _ => (method::for_scene(scene).name(), String::new()),
     };
     let size = if name == "hierarchical" {
         format!(
@@ -141,9 +145,10 @@ impl std::fmt::Display for InfoReport {
         }
         writeln!(
             f,
-            "form factors    about {:.1} MiB, about {:.1} s",
+            "form factors    about {:.1} MiB, about {:.1} s ({:.1} CPU-s; a sample of hemicubes drawn and counted)",
             self.estimated_form_factor_bytes as f64 / MIB,
-            self.estimated_form_factor_seconds
+            self.estimated_form_factor_seconds,
+            self.estimated_form_factor_cpu_seconds
         )?;
         if let Some(b) = &self.back_faces {
             writeln!(

@@ -125,6 +125,28 @@ fn auto_keeps_every_shipped_scene_on_the_matrix_and_sends_huge_meshes_to_the_hie
     assert_ne!(method::for_scene(&big).name(), "hierarchical");
 }
 
+/// `auto` decides on the matrix's predicted CPU time (`radiosity::matrix::cost`): a procedural room of
+/// about 1,000 diffuse triangles (one element each, 32² hemicubes) is predicted well under
+/// `AUTO_MATRIX_CPU_SECONDS` and stays on the matrix; one of about 40,000 goes hierarchical for its
+/// predicted time, not for memory (its count-based matrix, 40k rows of at most 0.85·32² entries, is
+/// about 0.3 GB). The hemicube time grows as n²: 25,000 triangles were predicted at 84 CPU-s, so 40,000
+/// are about 3.5 times the limit.
+#[test]
+fn auto_keeps_a_small_procedural_room_on_the_matrix_and_sends_a_large_one_to_the_hierarchy() {
+    let room = |triangles: usize| {
+        let mut s = radray::radiosity::hierarchy::procedural::room_with_objects(triangles);
+        s.radiosity.hemicube_resolution_px = 32;
+        s
+    };
+    let small = room(1_000);
+    assert_eq!(method::auto_prefers_hierarchy(&small), None);
+    assert_ne!(method::for_scene(&small).name(), "hierarchical");
+    let large = room(40_000);
+    let why = method::auto_prefers_hierarchy(&large).expect("the hierarchy");
+    assert!(why.contains("CPU-s") && !why.contains("GB"), "{why}");
+    assert_eq!(method::for_scene(&large).name(), "hierarchical");
+}
+
 #[test]
 fn pass_two_reads_the_leaf_mesh_with_conforming_vertex_values() {
     let s = cornell_hierarchical();

@@ -21,7 +21,10 @@ use crate::accel::Accel;
 use crate::cache::Lru;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::scene::{MethodChoice, RadiosityParams, SceneDescription, SolverKind, AUTO_MATRIX_SECONDS};
+use crate::scene::{
+    MethodChoice, RadiosityParams, SceneDescription, SolverKind, AUTO_MATRIX_CPU_SECONDS,
+    AUTO_MATRIX_CPU_SECONDS_SPECULAR,
+};
 use crate::transport::photons::RunPhotons;
 
 /// Why a method refuses a scene (before anything large is allocated).
@@ -181,11 +184,14 @@ pub fn for_scene(scene: &SceneDescription) -> Box<dyn PassOneMethod> {
     }
 }
 
-/// Why `method = "auto"` leaves the uniform mesh for the hierarchy, or `None` to keep it. Only the
-/// element count is needed (no meshing): with `store_form_factors = false` (matrix-free, O(n)
-/// memory) only above `run::MAX_ELEMENTS` elements; with the stored matrix also when its predicted
-/// size exceeds the `memory` budget or the memory available, or its predicted hemicube time
-/// (`form_factors::estimate_counts`, every element a row) exceeds `AUTO_MATRIX_SECONDS`.
+/// Why `method = "auto"` leaves the uniform mesh for the hierarchy, or `None` to keep it. With
+/// `store_form_factors = false` (matrix-free, O(n) memory) only above `run::MAX_ELEMENTS` elements.
+/// With the stored matrix also when its size from the element count alone
+/// (`form_factors::matrix_bytes_from_counts`, every element a row) exceeds the `memory` budget or the
+/// memory available, or when its hemicubes, predicted from a sample of them drawn on the uniform mesh
+/// (`matrix_estimate`), would take more than `AUTO_MATRIX_CPU_SECONDS` of CPU time
+/// (`AUTO_MATRIX_CPU_SECONDS_SPECULAR` when the mesh has mirrors or glass: the hierarchy transports
+/// diffuse light only, so it would lose the light through them).
 pub fn auto_prefers_hierarchy(scene: &SceneDescription) -> Option<String> {
     let params = &scene.radiosity;
     let elements = crate::mesh::count_elements(scene, params.max_element_edge);
@@ -195,22 +201,40 @@ pub fn auto_prefers_hierarchy(scene: &SceneDescription) -> Option<String> {
     if !params.store_form_factors {
         return None;
     }
-    let estimate = form_factors::estimate_counts(elements as usize, elements as usize, params);
+    let bytes = form_factors::matrix_bytes_from_counts(elements as usize, elements as usize, params);
     let budget = params.hierarchy.memory_bytes.min(available_memory_bytes().unwrap_or(u64::MAX));
-    if estimate.matrix_bytes > budget {
+    if bytes > budget {
         return Some(format!(
             "the full matrix of {elements} elements would take about {:.1} GB, over the budget of {:.1} GB",
-            estimate.matrix_bytes as f64 / 1e9,
+            bytes as f64 / 1e9,
             budget as f64 / 1e9
         ));
     }
-    if estimate.seconds > AUTO_MATRIX_SECONDS {
+    let mesh = Mesh::build(scene, params.max_element_edge);
+    let estimate = matrix_estimate(scene, &mesh);
+    let (limit, kind) = if specular::mesh_has_specular(&mesh, &scene.materials) {
+        (AUTO_MATRIX_CPU_SECONDS_SPECULAR, " for a scene with mirrors or glass")
+    } else {
+        (AUTO_MATRIX_CPU_SECONDS, "")
+    };
+    if estimate.cpu_seconds > limit {
         return Some(format!(
-            "the full matrix of {elements} elements would take about {:.0} s of hemicubes, over {AUTO_MATRIX_SECONDS} s",
-            estimate.seconds
+            "the full matrix of {elements} elements would take about {:.0} CPU-s of hemicubes, over the limit of {limit} CPU-s{kind}",
+            estimate.cpu_seconds
         ));
     }
     None
+}
+
+/// The full matrix of `mesh` predicted from a sample of its hemicubes (`form_factors::estimate`),
+/// followed through the scene's mirrors and glass as `FullMatrix` does, but without the photons' light
+/// paths (no photons are traced for an estimate; with them, hemicube paths stop at emitters).
+pub fn matrix_estimate(scene: &SceneDescription, mesh: &Mesh) -> form_factors::FormFactorEstimate {
+    let accel = specular_accel(scene, mesh);
+    let paths = accel
+        .as_ref()
+        .map(|accel| SpecularPaths::new(mesh, accel, &scene.materials).with_shading_normals(&scene.surfaces));
+    form_factors::estimate(mesh, &scene.radiosity, paths.as_ref())
 }
 
 /// Bytes the form-factor matrix may take at most: each stored row holds at most one entry per other

@@ -39,8 +39,12 @@ pub struct ItemBuffer {
     pub(super) vertex_stamp: Vec<u32>,
     /// Counts hemicubes (`begin` calls); never 0, so a zeroed stamp is never current.
     pub(super) generation: u32,
+    /// Polygons offered to the indexed adds since creation (before back-face and base-plane culling).
+    pub polygons_offered: u64,
     /// Polygons that passed culling (and were scan-converted) since creation: for benchmarks.
     pub polygons_rasterised: u64,
+    /// Pixels depth-tested by the scan converters since creation (`rasterise_convex`'s count).
+    pub pixels_tested: u64,
 }
 
 impl ItemBuffer {
@@ -59,7 +63,9 @@ impl ItemBuffer {
             vertex_code: Vec::new(),
             vertex_stamp: Vec::new(),
             generation: 1,
+            polygons_offered: 0,
             polygons_rasterised: 0,
+            pixels_tested: 0,
         }
     }
 
@@ -177,6 +183,7 @@ impl ItemBuffer {
         normal: Vec3,
         centre: Vec3,
     ) {
+        self.polygons_offered += 1;
         if indices.len() < 3 {
             return;
         }
@@ -339,7 +346,7 @@ impl ItemBuffer {
         let [mu, mv, mw] = to_face(f, m);
         let plane = [mu / (half * d), mv / (half * d), (mw - mu - if top { mv } else { 0.0 }) / d];
         let end = offset + width * height;
-        rasterise_convex(
+        self.pixels_tested += rasterise_convex(
             &screen[..count],
             width,
             height,

@@ -33,7 +33,8 @@ pub(super) fn snap(x: f32) -> i64 {
 /// polygon only for "top-left" edges (dy > 0, or dy = 0 and dx < 0, for a counter-clockwise polygon),
 /// so polygons sharing an edge never both cover a sample and leave no gap. Each row's span comes from
 /// intersecting the edges' half-lines, so the inner loop is a plain depth test: the pixel takes `item`
-/// when 1/w = plane·(i + ½, j + ½, 1) exceeds the stored value.
+/// when 1/w = plane·(i + ½, j + ½, 1) exceeds the stored value. Returns the pixels depth-tested (the
+/// span lengths, or `NARROW_PX` per row on the narrow path): the work done, for the cost model.
 pub(super) fn rasterise_convex(
     screen: &[[f32; 2]],
     width: usize,
@@ -42,7 +43,7 @@ pub(super) fn rasterise_convex(
     item: u32,
     inverse_depth: &mut [f32],
     items: &mut [u32],
-) {
+) -> u64 {
     let mut xs = [0i64; MAX_CLIPPED];
     let mut ys = [0i64; MAX_CLIPPED];
     let mut m = 0;
@@ -58,7 +59,7 @@ pub(super) fn rasterise_convex(
         m -= 1;
     }
     if m < 3 {
-        return;
+        return 0;
     }
     let mut area2 = 0i64;
     for k in 0..m {
@@ -66,7 +67,7 @@ pub(super) fn rasterise_convex(
         area2 += xs[k] * ys[k1] - xs[k1] * ys[k];
     }
     if area2 == 0 {
-        return;
+        return 0;
     }
     if area2 < 0 {
         xs[..m].reverse();
@@ -74,7 +75,7 @@ pub(super) fn rasterise_convex(
     }
     let (xmin, xmax) = (xs[..m].iter().min().copied(), xs[..m].iter().max().copied());
     let (ymin, ymax) = (ys[..m].iter().min().copied(), ys[..m].iter().max().copied());
-    let (Some(xmin), Some(xmax), Some(ymin), Some(ymax)) = (xmin, xmax, ymin, ymax) else { return };
+    let (Some(xmin), Some(xmax), Some(ymin), Some(ymax)) = (xmin, xmax, ymin, ymax) else { return 0 };
     let half = SUBPIXEL / 2;
     // Pixels whose centre i·S + S/2 lies in [min, max].
     let i_lo = (xmin - half + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
@@ -82,7 +83,7 @@ pub(super) fn rasterise_convex(
     let j_lo = (ymin - half + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
     let j_hi = (ymax - half).div_euclid(SUBPIXEL).min(height as i64 - 1);
     if i_lo > i_hi || j_lo > j_hi {
-        return;
+        return 0;
     }
     // Edge k: E(px, py) = dx (py − ay) − dy (px − ax) ≥ bias, bias 0 on top-left edges, else 1.
     // At pixel centre px = i·S + S/2 on row py: E − bias = K(py) − D·i with D = dy·S and
@@ -94,7 +95,7 @@ pub(super) fn rasterise_convex(
         let geometry = Outline { xs: &xs[..m], ys: &ys[..m] };
         let window = Window { start, i_lo, i_hi, j_lo, j_hi, width };
         if rasterise_narrow(&geometry, &window, plane, item, inverse_depth, items) {
-            return;
+            return (j_hi - j_lo + 1) as u64 * NARROW_PX as u64;
         }
     }
     let mut edges = [Edge::default(); MAX_CLIPPED];
@@ -121,6 +122,7 @@ pub(super) fn rasterise_convex(
     }
     let edges = &mut edges[..m];
     let [pa, pb, pc] = plane;
+    let mut tested = 0u64;
     for j in j_lo..=j_hi {
         let (mut lo, mut hi) = (i_lo, i_hi);
         for edge in edges.iter_mut() {
@@ -144,6 +146,7 @@ pub(super) fn rasterise_convex(
             continue;
         }
         let (lo, hi) = (lo as usize, hi as usize);
+        tested += (hi - lo + 1) as u64;
         let row = j as usize * width;
         let row_depth = pb * (j as f32 + 0.5) + pc + pa * 0.5;
         let depth = &mut inverse_depth[row + lo..=row + hi];
@@ -159,6 +162,7 @@ pub(super) fn rasterise_convex(
             *id = (*id & !mask) | (item & mask);
         }
     }
+    tested
 }
 
 /// Widest polygon (in pixels) drawn by `rasterise_narrow`: one row is one fixed-width block of lanes.

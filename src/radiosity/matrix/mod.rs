@@ -2,6 +2,7 @@
 //! (`form_factors`), the rows finished so far (`partial`) and their file (`rows_file`), which
 //! checkpoints and shards share. The solvers in `radiosity::solver` iterate over it.
 
+pub mod cost;
 pub mod form_factors;
 pub mod partial;
 pub mod rows_file;
