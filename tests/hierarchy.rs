@@ -9,9 +9,7 @@ use glam::{DVec3, Vec3};
 use proptest::prelude::*;
 use radray::radiosity::hierarchy::form_factor::{element_to_element, point_to_polygon};
 use radray::radiosity::hierarchy::nodes::Nodes;
-use radray::radiosity::hierarchy::{
-    self, clusters, gather, links, refine, solve as hsolve, HierarchyError, HierarchyParams,
-};
+use radray::radiosity::hierarchy::{self, clusters, gather, refine, solve as hsolve, HierarchyError, HierarchyParams};
 use radray::scene::{
     self, Camera, ImageSettings, Material, RadiosityParams, RenderParams, SceneDescription, SourceLoc, Surface,
 };
@@ -315,9 +313,12 @@ fn a_cluster_receiver_pushes_a_far_link_to_the_members_facing_it() {
     assert_eq!(total[wall], DVec3::ZERO);
 }
 
-/// The Cornell box refined at a coarse threshold, solved, then refined `passes` more times with the
-/// threshold halved each time (at that exitance); `each(pass, nodes, outcome)` sees every later pass.
-fn refine_cornell_passes(passes: usize, mut each: impl FnMut(usize, &Nodes, &refine::RefineOutcome)) {
+/// Refinement at a fixed exitance never raises the summed error estimate Σ ρ_R A_R B_S ΔF: a child
+/// link's spread is capped by its parent's share. Checked over a run of passes with thresholds
+/// falling by 2× each on the Cornell box, with the exitance of a first solve. Tolerance: the sums are
+/// f64 over ≤ 10⁶ terms, 1e-9 relative.
+#[test]
+fn refinement_never_makes_the_error_estimate_grow() {
     let scene = load_scene("cornell_box.toml");
     let (mut nodes, root, _inputs, tracing) = clusters::build(&scene).unwrap();
     let root = root as usize;
@@ -334,21 +335,9 @@ fn refine_cornell_passes(passes: usize, mut each: impl FnMut(usize, &Nodes, &ref
     let first = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {});
     hsolve::solve(&mut nodes, &first.links, root, 1.0, 1e-3, 100, &mut |_, _| {});
     let mut links = first.links;
-    for pass in 0..passes {
+    for pass in 0..5 {
         settings.threshold *= 0.5;
         let out = refine::refine(&mut nodes, &ctx, links.to_records(), Vec::new(), &settings, &mut |_, _, _| {});
-        each(pass, &nodes, &out);
-        links = out.links;
-    }
-}
-
-/// Refinement at a fixed exitance never raises the summed error estimate Σ ρ_R A_R B_S ΔF: a child
-/// link's spread is capped by its parent's share. Checked over a run of passes with thresholds
-/// falling by 2× each on the Cornell box, with the exitance of a first solve. Tolerance: the sums are
-/// f64 over ≤ 10⁶ terms, 1e-9 relative.
-#[test]
-fn refinement_never_makes_the_error_estimate_grow() {
-    refine_cornell_passes(5, |pass, _, out| {
         println!(
             "pass {pass}: error {:.6e} → {:.6e} W, {} links",
             out.error_before_w,
@@ -356,28 +345,8 @@ fn refinement_never_makes_the_error_estimate_grow() {
             out.links.len()
         );
         assert!(out.error_after_w <= out.error_before_w * (1.0 + 1e-9), "pass {pass}: {out:?}");
-    });
-}
-
-/// No near link with a cluster end is kept while it carries light (`links::must_split`): its transfer
-/// would be pushed to (or pulled from) members whose form factors and visibility differ, the push leak
-/// that made gap_room and the two-room leak worse with the unbiased near estimator. Checked on the
-/// Cornell box after a first solve and a second, finer pass (the first pass sees only the lamp lit).
-#[test]
-fn no_lit_near_link_with_a_cluster_end_is_kept() {
-    refine_cornell_passes(1, |_, nodes, out| {
-        assert!(!out.budget_exceeded);
-        let records = out.links.to_records();
-        let clustered =
-            records.iter().filter(|l| nodes.is_cluster[l.receiver as usize] || nodes.is_cluster[l.source as usize]);
-        assert!(clustered.count() > 0, "the box keeps far links with a cluster end");
-        for l in &records {
-            let (r, s) = (l.receiver as usize, l.source as usize);
-            let clustered = nodes.is_cluster[r] || nodes.is_cluster[s];
-            let lit = nodes.reflectance_max[r] > 0.0 && nodes.exitance_mean[s] > 0.0;
-            assert!(!(clustered && lit && links::is_near(nodes, r, s)), "kept near link {r} <- {s}: {l:?}");
-        }
-    });
+        links = out.links;
+    }
 }
 
 /// Mean exitance per input surface on the Cornell box, hierarchy against the full-matrix hemicube
@@ -606,14 +575,8 @@ fn two_rooms_through_a_wall(grid: u32) -> (SceneDescription, Vec<bool>) {
 /// happened not to sample the hidden part (V = 1). Exact zero needs the issue's "refine where
 /// visibility is partial" independent of the power threshold for cluster receivers, or a cluster
 /// push that distributes by each child's own visibility.
-///
-/// Session 8 (branch hleak, main merged with the unbiased near estimator): 0.293 W of 87.8 W at the
-/// preview threshold before; near links with a cluster end are no longer kept while they carry light
-/// (`links::must_split`): 0.284 W when only cluster receivers were forced, 0.103 W of 88.0 W with both
-/// ends. What is left comes through far links with a partly hidden cluster end (V averaged over the
-/// members, one value pushed or pulled), kept because each is under the threshold.
 #[test]
-#[ignore = "0.103 W of 88.0 W still leaks at the preview threshold (0.293 W before must_split); see doc comment"]
+#[ignore = "0.064 W of 83.0 W still leaks at the preview threshold (0.151 W before push_spread); see doc comment"]
 fn light_does_not_leak_through_a_wall_into_a_dark_room() {
     let (scene, dark) = two_rooms_through_a_wall(4);
     for params in [HierarchyParams::preview(), HierarchyParams::default()] {
@@ -690,18 +653,18 @@ fn near_link_leaf_pair_estimator_matches_polygon_to_polygon_cases() {
     assert_eq!(checked, 9);
 }
 
-/// The near-link ray estimator (`visibility::sampled_form_factor`: Lambert's exact point-to-element
-/// form factor from a sampled receiver point to a source element drawn by area, times the ray
-/// visibility; used by `links::near_form_factor` above 64 leaf pairs) against every
-/// polygon-to-polygon case, with the default 8 visibility rays (16 samples), averaged over 64 seeds.
-/// The estimator is unbiased by construction (E[F(x → T)/p(T)] = F(x → S)), so the mean's deviation
-/// from the exact value is pure noise: the tolerance is 4 standard errors of the mean (measured from
-/// the 64 samples themselves), plus 1e-5 relative for the f32 form factor and ray offsets.
+/// The near-link ray estimator (`visibility::sampled_form_factor`, Wallace et al.'s disk estimator,
+/// used by `links::near_form_factor` above 64 leaf pairs) against every polygon-to-polygon case, with
+/// the default 8 visibility rays (16 point pairs), averaged over 64 seeds: its bias must be within 4
+/// standard errors of that mean.
 ///
-/// Until session 7 this was Wallace et al.'s disk estimator, A_S cos θ_x cos θ_y / (π d² + A_S/N) per
-/// point pair, and the test was ignored: biased low by 18–42% on perpendicular rectangles sharing an
-/// edge, 30% on disks r 1 → 2 at separation 0.5, 4.3% on parallel squares at separation 0.5.
+/// Ignored: it is biased low where the ends are close, because each sample's kernel is divided by
+/// π d² + A_S/N and the disk term dominates near the ends' contact. Measured (bias relative, standard
+/// error): parallel squares at separation 0.5 −4.3% (2.6%), at 1 and 2 within 1.2%; perpendicular
+/// rectangles sharing an edge −18% to −42% (4–6%); disks r 1 → 2 at separation 0.5 −30% (3.7%); other
+/// disks within 1.6%. This is suspect (a) of issue 10 for near cluster links, still to fix.
 #[test]
+#[ignore = "the ray-traced near-link estimator is biased low by 18-42% on touching or close cases (see doc comment)"]
 fn near_link_ray_estimator_is_unbiased_on_polygon_to_polygon_cases() {
     use radray::radiosity::hierarchy::links::near_form_factor;
     use radray::radiosity::hierarchy::visibility::VisibilityContext;
@@ -729,7 +692,7 @@ fn near_link_ray_estimator_is_unbiased_on_polygon_to_polygon_cases() {
             (mean - want) / want,
             se / want
         );
-        worst = worst.max((mean - want).abs() / (se + 1e-5 * want));
+        worst = worst.max((mean - want).abs() / se);
     }
     assert!(worst <= 4.0, "worst bias at {worst:.1} standard errors");
 }

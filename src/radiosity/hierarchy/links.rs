@@ -145,32 +145,6 @@ pub fn near_spread(nodes: &Nodes, receiver: usize, source: usize) -> f32 {
     }
 }
 
-/// Whether a near link may not be kept whatever its error (Hanrahan, Salzman and Aupperle 1991:
-/// refine where the transfer varies over an end, not only where it is large): a cluster is at either
-/// end and the link carries light (ρ_R > 0 and B_S > 0). A kept link's transfer is one value: pushed
-/// to a cluster receiver's members by its centre-to-centre direction (`gather::gather`), or pulled
-/// from a cluster source's mean exitance. For a near link (the ends overlap or straddle a plane, or a
-/// self-link) that direction says nothing, and the members' form factors and visibility differ most
-/// (a floor cluster on both sides of a wall, a wall cluster holding a door jamb): light leaks to
-/// members the source cannot see, or from members the receiver cannot see. Measured in one binary,
-/// radiosity mode, default preset (relMSE; two-room leak test at the preview threshold):
-///
-/// | kept near links with a cluster end | cornell_original | gap_room | two-room leak |
-/// |---|---|---|---|
-/// | all (before) | 0.00148 | 0.0524 | 0.293 W |
-/// | none with a cluster receiver | 0.00140 | 0.0354 | 0.284 W |
-/// | none (this rule) | 0.00139 | 0.0426 | 0.103 W |
-///
-/// Forcing also the far links whose cluster receiver is partly hidden (0 < V < 1) added nothing on
-/// cornell_original (0.00140) for +10% CPU. Dark links stay cheap: they are decided again with the
-/// exitance of the next pass.
-pub fn must_split(nodes: &Nodes, receiver: usize, source: usize) -> bool {
-    (nodes.is_cluster[receiver] || nodes.is_cluster[source])
-        && is_near(nodes, receiver, source)
-        && nodes.reflectance_max[receiver] > 0.0
-        && nodes.exitance_mean[source] > 0.0
-}
-
 /// The total error of a link as refinement judges it (W): `link_error_power` plus
 /// `source_variation_power`, the latter with the form factor of a far link or the bound of a near one.
 pub fn refinement_error(nodes: &Nodes, link: &LinkRecord) -> f64 {
@@ -211,9 +185,8 @@ pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
 ///   plus `push_spread` (a cluster receiver partly hidden from the source), not capped.
 /// - Near links kept with an estimated F also add `near_push_spread`.
 /// - Near links (`is_near`): ΔF = `near_spread`. When the link's error with that bound is above
-///   `threshold_w`, or it `must_split`, it is about to be split and F is not estimated (NaN, so that
-///   a kept one is caught);
-///   otherwise F = `near_form_factor`, and `None` when the ends cannot exchange light.
+///   `threshold_w` it is about to be split and F is not estimated (NaN, so that a kept one is caught);
+///   otherwise F = `visibility::sampled_form_factor`, and `None` when no sample pair faces each other.
 pub fn estimate(
     nodes: &Nodes,
     ctx: &VisibilityContext,
@@ -239,7 +212,7 @@ pub fn estimate(
     if is_near(nodes, receiver, source) {
         let spread = near_spread(nodes, receiver, source).min(spread_cap);
         let record = LinkRecord { receiver: receiver as u32, source: source as u32, form_factor: 0.0, spread };
-        if refinement_error(nodes, &record) > threshold_w || must_split(nodes, receiver, source) {
+        if refinement_error(nodes, &record) > threshold_w {
             return Some((f32::NAN, spread));
         }
         let f = near_form_factor(nodes, ctx, receiver, source)?;
@@ -333,8 +306,7 @@ pub const EXACT_NEAR_PAIRS: usize = 64;
 ///   estimator (Lambert exact in the source, three-point rule over the receiver) over every pair of
 ///   leaf elements below the two ends, times the ray visibility fraction of the link; `None` when
 ///   every pair's F is 0.
-/// - Larger: `visibility::sampled_form_factor` (Lambert point-to-element, unbiased); `None` when no
-///   sampled receiver point sees its source element.
+/// - Larger: `visibility::sampled_form_factor`; `None` when no sample pair faces each other.
 pub fn near_form_factor(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source: usize) -> Option<f32> {
     let (mut rs, mut ss) = (Vec::new(), Vec::new());
     let small = leaves_below(nodes, receiver, EXACT_NEAR_PAIRS, &mut rs)

@@ -8,8 +8,8 @@ use rayon::prelude::*;
 
 use super::estimates::{estimate_links, EstimateHooks, EstimateKind, EstimateLog, Stopped};
 use super::links::{
-    link_error_power, must_split, near_form_factor, near_push_spread, refinement_error, source_variation_power,
-    LinkRecord, Links, LINK_BYTES,
+    link_error_power, near_form_factor, near_push_spread, refinement_error, source_variation_power, LinkRecord, Links,
+    LINK_BYTES,
 };
 use super::nodes::{Nodes, NODE_BYTES};
 use super::shards::estimate_shared;
@@ -263,8 +263,7 @@ enum Decision {
 }
 
 /// The decision for `link` from the state the round started with: kept while its `refinement_error`
-/// is within the allowed error and it need not split (`links::must_split`: a near link to a cluster
-/// receiver that carries light), else expanded (a self-link) or split at the end `choose_split` picks,
+/// is within the allowed error, else expanded (a self-link) or split at the end `choose_split` picks,
 /// kept when nothing can be split. A pure read of `nodes`: the splits made earlier in the same round
 /// only add children, which inherit their parent's exitance, to leaf elements, and neither that
 /// (source variation 0, like a leaf's) nor the subdivision itself (made only where `choose_split`
@@ -273,7 +272,7 @@ enum Decision {
 /// when the decisions are applied, in link order.
 fn decide(nodes: &Nodes, link: &LinkRecord, settings: &RefineSettings) -> Decision {
     let (r, s) = (link.receiver as usize, link.source as usize);
-    if !(refinement_error(nodes, link) > settings.allowed_error_w(nodes.area[r]) || must_split(nodes, r, s)) {
+    if !(refinement_error(nodes, link) > settings.allowed_error_w(nodes.area[r])) {
         return Decision::Keep;
     }
     if r == s {
