@@ -18,6 +18,7 @@
 //! The hemicube is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
 
 pub mod clusters;
+pub mod contact;
 pub mod estimates;
 pub mod form_factor;
 pub mod gather;
@@ -42,6 +43,7 @@ use glam::{DVec3, Vec3};
 use crate::accel::Accel;
 use crate::material::SceneTextures;
 use crate::scene::SceneDescription;
+use contact::{split_at_contacts, ContactProbe};
 use estimates::{EstimateHooks, EstimateLog, Stopped};
 use interpolate::LeafMesh;
 use links::{refinement_error, LinkRecord, Links, LINK_BYTES};
@@ -273,6 +275,21 @@ impl LinkStructure {
     pub fn link_count(&self) -> usize {
         self.links.len()
     }
+
+    /// The nodes, with the final exitance of the solve that refined them.
+    pub fn nodes(&self) -> &Nodes {
+        &self.nodes
+    }
+
+    /// The links by receiver.
+    pub fn links(&self) -> &Links {
+        &self.links
+    }
+
+    /// The input triangles (each one's scene surface, side and node).
+    pub fn inputs(&self) -> &clusters::InputTriangles {
+        &self.inputs
+    }
 }
 
 /// Solves the scene's diffuse radiosity hierarchically, with every material's Kd and π·Ke (no
@@ -370,6 +387,15 @@ pub fn solve_logged(
         min_element_area,
         budget_bytes: params.memory_bytes,
     };
+    if reuse.is_none() {
+        // Where an object rests on an element, split it down to the minimum size along the contact
+        // and keep the enclosed part out of what the element sends and shows (`contact`).
+        let probe =
+            ContactProbe { accel: &accel, tracing: &tracing, offset: ctx.offset, contact_distance: diagonal * 1e-4 };
+        let first_piece = nodes.len();
+        split_at_contacts(&mut nodes, &inputs.node, &probe, min_element_area);
+        nodes.assign_texture_means(first_piece);
+    }
     let mut stats = HierarchyStats {
         input_triangles: inputs.node.len(),
         clusters: nodes.is_cluster.iter().filter(|&&c| c).count(),
