@@ -87,6 +87,16 @@ pub enum ContactPlan {
     Split(Box<[ContactPlan; 4]>),
 }
 
+impl ContactPlan {
+    /// The open share of the element the plan is for (quarters have equal areas).
+    pub fn open_share(&self) -> f32 {
+        match self {
+            ContactPlan::Leaf { open_share } => *open_share,
+            ContactPlan::Split(children) => children.iter().map(ContactPlan::open_share).sum::<f32>() * 0.25,
+        }
+    }
+}
+
 /// Levels of probes an element of `area` gets: as many as keep each probe's sub-triangle at least
 /// `min_area`, at most `MAX_PROBE_LEVELS`.
 fn probe_levels(area: f32, min_area: f32) -> u32 {
@@ -135,7 +145,15 @@ pub struct ContactStats {
 /// resting on them begins (`plan`, down to `min_area`), sets every leaf's `open_area` to its open
 /// share of its area and every inner node's to the sum below it. Plans are made in parallel and
 /// applied in order, so the nodes are the same for any thread count.
-pub fn split_at_contacts(nodes: &mut Nodes, elements: &[u32], probe: &ContactProbe, min_area: f32) -> ContactStats {
+/// At most `max_nodes` nodes in all (the memory budget): past it, an element planned to split stays
+/// a leaf with its plan's open share.
+pub fn split_at_contacts(
+    nodes: &mut Nodes,
+    elements: &[u32],
+    probe: &ContactProbe,
+    min_area: f32,
+    max_nodes: usize,
+) -> ContactStats {
     let plans: Vec<ContactPlan> = {
         let nodes: &Nodes = nodes;
         elements
@@ -148,19 +166,21 @@ pub fn split_at_contacts(nodes: &mut Nodes, elements: &[u32], probe: &ContactPro
     for (&e, p) in elements.iter().zip(&plans) {
         stack.push((e as usize, p));
         while let Some((n, p)) = stack.pop() {
+            let over_budget = nodes.len() + 4 > max_nodes;
             match p {
-                ContactPlan::Leaf { open_share } => {
-                    if *open_share < 1.0 {
-                        nodes.open_area[n] = nodes.area[n] * open_share;
-                        stats.hidden_leaves += 1;
-                        stats.hidden_area += (nodes.area[n] - nodes.open_area[n]) as f64;
-                    }
-                }
-                ContactPlan::Split(children) => {
+                ContactPlan::Split(children) if !over_budget => {
                     let first = nodes.subdivide(n) as usize;
                     stats.split += 1;
                     for (k, c) in children.iter().enumerate().rev() {
                         stack.push((first + k, c));
+                    }
+                }
+                _ => {
+                    let open_share = p.open_share();
+                    if open_share < 1.0 {
+                        nodes.open_area[n] = nodes.area[n] * open_share;
+                        stats.hidden_leaves += 1;
+                        stats.hidden_area += (nodes.area[n] - nodes.open_area[n]) as f64;
                     }
                 }
             }
@@ -259,7 +279,7 @@ mod tests {
         let floor = [vec3(0.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0), vec3(1.0, 0.0, 1.0)];
         let e = nodes.push_element(floor, 0, 0, Vec3::splat(0.5), Vec3::ZERO);
         let min_area = 0.5 / 4f32.powi(5);
-        let stats = split_at_contacts(&mut nodes, &[e], &p, min_area);
+        let stats = split_at_contacts(&mut nodes, &[e], &p, min_area, usize::MAX);
         assert!(stats.split > 0 && stats.hidden_leaves > 0);
         let inside = |c: Vec3| c.x > 0.3 && c.x < 0.7 && c.z > 0.3 && c.z < 0.7;
         let mut crossing = 0;
@@ -296,7 +316,7 @@ mod tests {
         let mut nodes = Nodes::default();
         let wall = [vec3(0.0, 0.0, 2.0), vec3(1.0, 0.0, 2.0), vec3(1.0, 1.0, 2.0)];
         let e = nodes.push_element(wall, 0, 0, Vec3::splat(0.5), Vec3::ZERO);
-        let stats = split_at_contacts(&mut nodes, &[e], &p, 1e-4);
+        let stats = split_at_contacts(&mut nodes, &[e], &p, 1e-4, usize::MAX);
         assert_eq!(stats, ContactStats::default());
         assert_eq!(nodes.len(), 1);
         assert_eq!(nodes.open_area[0], nodes.area[0]);

@@ -393,7 +393,9 @@ pub fn solve_logged(
         let probe =
             ContactProbe { accel: &accel, tracing: &tracing, offset: ctx.offset, contact_distance: diagonal * 1e-4 };
         let first_piece = nodes.len();
-        split_at_contacts(&mut nodes, &inputs.node, &probe, min_element_area);
+        // At most half the budget's nodes, so refinement keeps room.
+        let max_nodes = params.memory_bytes / 2 / (NODE_BYTES + std::mem::size_of::<u32>());
+        split_at_contacts(&mut nodes, &inputs.node, &probe, min_element_area, max_nodes);
         nodes.assign_texture_means(first_piece);
     }
     let mut stats = HierarchyStats {
