@@ -20,25 +20,14 @@ y 0..2, z 4.2). Emitters seen directly by the camera are not drawn (none is, in 
 The scene, camera, film and materials are references/mitsuba_scene.py's (box filter: each pixel is
 the mean radiance over its area). Prints one JSON line with render_s and cpu_s.
 """
-import time
-
-T0 = time.perf_counter()
-import argparse
-import json
 import os
-import resource
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import numpy as np
 
-import mitsuba_scene as ms
-
-
-def cpu_seconds():
-    r = resource.getrusage(resource.RUSAGE_SELF)
-    return r.ru_utime + r.ru_stime
+from portal_tracer import accumulate, run_cli, weigh_and_roulette
 
 
 def portal_pdf(mi, dr, p, d, portal):
@@ -112,14 +101,7 @@ def render_pass(mi, dr, scene, spp, seed, portal, q=0.5, max_depth=64, rr_depth=
         wo_world = dr.select(use_portal, dr.normalize(pp - si.p), si.to_world(bs.wo))
         f, pdf_bsdf = bsdf.eval_pdf(ctx, si, si.to_local(wo_world), active)
         pdf = dr.select(lit, q * portal_pdf(mi, dr, si.p, wo_world, portal) + (1.0 - q) * pdf_bsdf, pdf_bsdf)
-        ok = active & (pdf > 0) & (dr.max(f) > 0)
-        beta = dr.select(ok, beta * f / dr.select(pdf > 0, pdf, 1.0), 0.0)
-        active &= ok
-        if depth >= rr_depth:
-            surv = dr.minimum(dr.max(beta), 0.95)
-            alive = rng.next_float32() < surv
-            beta = dr.select(alive, beta / surv, 0.0)
-            active &= alive
+        beta, active = weigh_and_roulette(dr, rng, beta, active, f, pdf, depth >= rr_depth)
         ray = si.spawn_ray(wo_world)
         dr.eval(beta, active, ray, rng)
         if not dr.any(active):
@@ -128,42 +110,8 @@ def render_pass(mi, dr, scene, spp, seed, portal, q=0.5, max_depth=64, rr_depth=
 
 
 def render(mi, dr, scene, spp, seed, portal, pass_spp=16, q=0.5):
-    acc, done, k = None, 0, 0
-    while done < spp:
-        m = min(pass_spp, spp - done)
-        img = render_pass(mi, dr, scene, m, seed * 1000003 + k, portal, q)
-        acc = img * m if acc is None else acc + img * m
-        done += m
-        k += 1
-    return acc / spp
-
-
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("scene")
-    ap.add_argument("spp", type=int)
-    ap.add_argument("seed", type=int)
-    ap.add_argument("out")
-    ap.add_argument("--pass-spp", type=int, default=16)
-    ap.add_argument("--portal", default="2.8,3.3,0.0,2.0,4.2")
-    ap.add_argument("--q", type=float, default=0.5)
-    a = ap.parse_args()
-    portal = [float(v) for v in a.portal.split(",")]
-    mi, variant = ms.init_mitsuba("llvm_ad_rgb")
-    import drjit as dr
-    scene = mi.load_dict(ms.scene_dict(mi, a.scene, spp=a.spp, seed=a.seed))
-    if len(scene.emitters()) != 1:
-        raise SystemExit("%s: portal_ptracer.py handles one area emitter, found %d" % (a.scene, len(scene.emitters())))
-    c0, t0 = cpu_seconds(), time.perf_counter()
-    img = render(mi, dr, scene, a.spp, a.seed, portal, a.pass_spp, a.q)
-    tr, cr = time.perf_counter() - t0, cpu_seconds() - c0
-    if a.out.endswith(".npy"):
-        np.save(a.out, img)
-    else:
-        mi.Bitmap(img.astype(np.float32)).write(a.out)
-    print(json.dumps({"scene": a.scene, "spp": a.spp, "seed": a.seed, "variant": variant, "render_s": tr,
-                      "cpu_s": cr, "total_s": time.perf_counter() - T0, "out": a.out}))
+    return accumulate(lambda m, s: render_pass(mi, dr, scene, m, s, portal, q), spp, seed, pass_spp)
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(__doc__, render, "2.8,3.3,0.0,2.0,4.2", 16, one_emitter=True)

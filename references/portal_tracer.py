@@ -2,7 +2,7 @@
 """An unbiased path tracer with portal sampling, for scenes lit through a gap (references/gap_room).
 
 usage: python3 references/portal_tracer.py SCENE_DIR SPP SEED OUT.exr [--pass-spp 8]
-                                            [--portal X0,X1,Y0,Y1,Z] [--max-depth 64]
+                                            [--portal X0,X1,Y0,Y1,Z] [--q 0.5]
 
 Why: in gap_room every light path the camera sees passes a 0.5 x 2 m door gap. Mitsuba's `path`
 integrator finds the gap only by chance (BSDF sampling), and its `ptracer` wastes most particles in
@@ -91,14 +91,7 @@ def render_pass(mi, dr, scene, spp, seed, portal, max_depth=64, rr_depth=5, q=0.
         inside = dark & (dz > 1e-7) & (hx >= x0) & (hx <= x1) & (hy >= y0) & (hy <= y1)
         pdf_portal = dr.select(inside, t * t / (area * dz), 0.0)
         pdf = dr.select(dark, q * pdf_portal + (1.0 - q) * pdf_bsdf, pdf_bsdf)
-        ok = active & (pdf > 0) & (dr.max(f) > 0)
-        beta = dr.select(ok, beta * f / dr.select(pdf > 0, pdf, 1.0), 0.0)
-        active &= ok
-        if depth >= rr_depth:
-            surv = dr.minimum(dr.max(beta), 0.95)
-            alive = rng.next_float32() < surv
-            beta = dr.select(alive, beta / surv, 0.0)
-            active &= alive
+        beta, active = weigh_and_roulette(dr, rng, beta, active, f, pdf, depth >= rr_depth)
         ray = si.spawn_ray(wo_world)
         dr.eval(L, beta, active, ray, rng)
         if not dr.any(active):
@@ -108,32 +101,55 @@ def render_pass(mi, dr, scene, spp, seed, portal, max_depth=64, rr_depth=5, q=0.
     return img
 
 
-def render(mi, dr, scene, spp, seed, portal, pass_spp=8):
+def weigh_and_roulette(dr, rng, beta, active, f, pdf, roulette):
+    """beta · f/pdf for the sampled direction (f the BSDF times the cosine), then Russian roulette
+    with survival min(max(beta), 0.95) when `roulette`, as Mitsuba's `path`."""
+    ok = active & (pdf > 0) & (dr.max(f) > 0)
+    beta = dr.select(ok, beta * f / dr.select(pdf > 0, pdf, 1.0), 0.0)
+    active &= ok
+    if roulette:
+        surv = dr.minimum(dr.max(beta), 0.95)
+        alive = rng.next_float32() < surv
+        beta = dr.select(alive, beta / surv, 0.0)
+        active &= alive
+    return beta, active
+
+
+def accumulate(render_pass, spp, seed, pass_spp):
+    """Mean of passes of at most `pass_spp` samples, `render_pass(spp, seed)` with seeds seed·1000003 + k."""
     acc, done, k = None, 0, 0
     while done < spp:
         m = min(pass_spp, spp - done)
-        img = render_pass(mi, dr, scene, m, seed * 1000003 + k, portal)
+        img = render_pass(m, seed * 1000003 + k)
         acc = img * m if acc is None else acc + img * m
         done += m
         k += 1
     return acc / spp
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def render(mi, dr, scene, spp, seed, portal, pass_spp=8, q=0.5):
+    return accumulate(lambda m, s: render_pass(mi, dr, scene, m, s, portal, q=q), spp, seed, pass_spp)
+
+
+def run_cli(doc, render_fn, default_portal, default_pass_spp, one_emitter=False):
+    """The command line both portal tracers share: SCENE_DIR SPP SEED OUT [--pass-spp] [--portal] [--q]."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scene")
     ap.add_argument("spp", type=int)
     ap.add_argument("seed", type=int)
     ap.add_argument("out")
-    ap.add_argument("--pass-spp", type=int, default=8)
-    ap.add_argument("--portal", default="2.8,3.3,0.0,2.0,4.0")
+    ap.add_argument("--pass-spp", type=int, default=default_pass_spp)
+    ap.add_argument("--portal", default=default_portal)
+    ap.add_argument("--q", type=float, default=0.5)
     a = ap.parse_args()
     portal = [float(v) for v in a.portal.split(",")]
     mi, variant = ms.init_mitsuba("llvm_ad_rgb")
     import drjit as dr
     scene = mi.load_dict(ms.scene_dict(mi, a.scene, spp=a.spp, seed=a.seed))
+    if one_emitter and len(scene.emitters()) != 1:
+        raise SystemExit("%s: this tracer handles one area emitter, found %d" % (a.scene, len(scene.emitters())))
     c0, t0 = cpu_seconds(), time.perf_counter()
-    img = render(mi, dr, scene, a.spp, a.seed, portal, a.pass_spp)
+    img = render_fn(mi, dr, scene, a.spp, a.seed, portal, a.pass_spp, a.q)
     tr, cr = time.perf_counter() - t0, cpu_seconds() - c0
     if a.out.endswith(".npy"):
         np.save(a.out, img)
@@ -144,4 +160,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    run_cli(__doc__, render, "2.8,3.3,0.0,2.0,4.0", 8)
