@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
 
+use super::adaptive::refinement::Refinement;
 use super::fingerprint::fingerprint;
 use super::leaf_mesh::LeafGeometry;
 use crate::mesh::Mesh;
@@ -30,6 +31,9 @@ pub struct Solution {
     /// For a hierarchical solution: the leaf elements it lives on (pass two's mesh is built from them,
     /// `leaf_mesh::build`); `None` for a solution on the scene's uniform mesh.
     pub leaf_geometry: Option<Arc<LeafGeometry>>,
+    /// For an adaptive solution: the levels of splits that made its mesh from the scene's patch mesh
+    /// (`adaptive::refinement::mesh_of` rebuilds it); `None` otherwise.
+    pub refinement: Option<Arc<Refinement>>,
 }
 
 fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
@@ -64,6 +68,7 @@ impl Solution {
             mesh_fingerprint: fingerprint(mesh, materials),
             stats,
             leaf_geometry: None,
+            refinement: None,
         }
     }
 
@@ -83,6 +88,7 @@ impl Solution {
                 converged: true,
             },
             leaf_geometry: None,
+            refinement: None,
         }
     }
 

@@ -10,6 +10,7 @@
 
 pub mod criterion;
 pub mod hanging;
+pub mod refinement;
 pub mod subdivide;
 
 use std::sync::Arc;
@@ -27,6 +28,7 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
 use crate::transport::photons::RunPhotons;
+use refinement::Refinement;
 use subdivide::EdgeMidpoints;
 
 /// Hemicube resolution the deciding levels never go below.
@@ -62,15 +64,6 @@ fn splittable(mesh: &Mesh) -> Vec<bool> {
 impl Adaptive {
     fn params(&self, scene: &SceneDescription) -> RadiosityParams {
         RadiosityParams { solver: self.solver, ..scene.radiosity.clone() }
-    }
-
-    /// The patch mesh: the scene's uniform mesh at `ADAPTIVE_PATCH_FACTOR × max_element_edge`, with
-    /// `textures`, and its buried elements marked.
-    fn patch_mesh(scene: &SceneDescription, textures: Arc<crate::material::SceneTextures>) -> Mesh {
-        let edge = scene.radiosity.max_element_edge;
-        let mut mesh = Mesh::build_with_textures(scene, edge, textures);
-        mesh.element_buried = crate::burial::buried_elements(&mesh);
-        mesh
     }
 
     /// Hemicube form factors of `mesh` (through mirrors and glass when `photons` is given) and the
@@ -169,10 +162,11 @@ impl PassOneMethod for Adaptive {
         let settings = &scene.radiosity.adaptive;
         let mut stats =
             PassOneStats { hemicube_resolution_px: scene.radiosity.hemicube_resolution_px, ..Default::default() };
-        let mut current = Self::patch_mesh(scene, mesh.textures.clone());
+        let mut current = refinement::patch_mesh(scene, mesh.textures.clone());
         let specular = crate::radiosity::specular::mesh_has_specular(&current, &scene.materials);
         let min_edge = scene.radiosity.hierarchy.min_element_size.unwrap_or(scene.diagonal() / 200.0);
         let mut midpoints = EdgeMidpoints::default();
+        let mut record = Refinement::default();
         let mut level = 0;
         let solved = loop {
             let last = level == settings.levels;
@@ -200,13 +194,15 @@ impl PassOneMethod for Adaptive {
                 let photons = specular.then_some(photons);
                 break self.solve_level(scene, solved.mesh, &midpoints, photons, level, true, progress, &mut stats)?;
             }
-            current = subdivide::split(&solved.mesh, &split, &mut midpoints);
-            current.element_buried = crate::burial::buried_elements(&current);
+            current = refinement::split_level(&solved.mesh, &split, &mut midpoints);
+            record.record(&split);
             level += 1;
         };
         stats.elements = solved.mesh.elements.len();
         stats.solver = Some(self.name());
         stats.hemicubes_per_second = stats.elements as f64 / stats.form_factor_seconds.max(1e-9);
-        Ok(PassOne { mesh: solved.mesh, solution: solved.solution, stats, reused_form_factors: false })
+        // The file carries the refinement, so `render --solution` rebuilds this mesh (`refinement`).
+        let solution = Solution { refinement: Some(Arc::new(record)), ..solved.solution };
+        Ok(PassOne { mesh: solved.mesh, solution, stats, reused_form_factors: false })
     }
 }
