@@ -112,30 +112,37 @@ fn manifest(dir: &Path) -> Vec<serde_json::Value> {
 }
 
 const BLUE_LIGHT: &str = "materials = { light = { ke = [4.0, 8.0, 20.0] } }";
+const SIDE_VIEW: &str = "camera = { eye = [400.0, 300.0, -600.0] }";
+
+/// Writes `dir/jobs.toml` with one adaptive Cornell-box job per (output, height, extra keys), runs
+/// `radray batch` on it with `args`, asserts success and returns the manifest's jobs.
+fn adaptive_batch(dir: &Path, jobs: &[(&str, u32, &str)], args: &[&str]) -> Vec<serde_json::Value> {
+    let s = scene_path("cornell_box.toml").display().to_string();
+    let text: String = jobs
+        .iter()
+        .map(|(output, height, extra)| {
+            small_batch_job(&s, &format!("\"{output}\""), *height, &format!("method = \"adaptive\"\n{extra}"))
+        })
+        .collect();
+    let jobs_path = dir.join("jobs.toml");
+    std::fs::write(&jobs_path, text).unwrap();
+    let mut a = vec!["batch", jobs_path.to_str().unwrap()];
+    a.extend(args);
+    let out = radray(&a);
+    assert!(out.status.success(), "{}", stderr(&out));
+    manifest(dir)
+}
 
 #[test]
 fn a_batch_reuses_an_adaptive_solution_for_a_new_view_and_re_solves_new_materials_like_a_fresh_run() {
     let dir = tempfile::tempdir().unwrap();
-    let s = scene_path("cornell_box.toml").display().to_string();
-    let m = "method = \"adaptive\"\n";
-    let jobs = [
-        small_batch_job(&s, "\"a.png\"", 16, m),
-        small_batch_job(&s, "\"b.png\"", 12, &format!("{m}camera = {{ eye = [400.0, 300.0, -600.0] }}")),
-        small_batch_job(&s, "\"c.png\"", 16, &format!("{m}{BLUE_LIGHT}")),
-    ]
-    .concat();
-    std::fs::write(dir.path().join("jobs.toml"), jobs).unwrap();
-    let out = radray(&["batch", dir.path().join("jobs.toml").to_str().unwrap()]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let jobs = manifest(dir.path());
+    let jobs =
+        adaptive_batch(dir.path(), &[("a.png", 16, ""), ("b.png", 12, SIDE_VIEW), ("c.png", 16, BLUE_LIGHT)], &[]);
     assert_eq!(jobs[1]["reused_solution"], true, "a new view reuses the solution and its refined mesh");
     assert_eq!(jobs[2]["reused_solution"], false, "new emission is a new solution");
     // The materials-only job alone, in a fresh batch (nothing cached), gives the same bytes.
     let fresh = tempfile::tempdir().unwrap();
-    std::fs::write(fresh.path().join("jobs.toml"), small_batch_job(&s, "\"c.png\"", 16, &format!("{m}{BLUE_LIGHT}")))
-        .unwrap();
-    let out = radray(&["batch", fresh.path().join("jobs.toml").to_str().unwrap()]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    adaptive_batch(fresh.path(), &[("c.png", 16, BLUE_LIGHT)], &[]);
     assert_eq!(
         std::fs::read(dir.path().join("c.png")).unwrap(),
         std::fs::read(fresh.path().join("c.png")).unwrap(),
@@ -151,23 +158,12 @@ fn a_batch_reuses_an_adaptive_solution_for_a_new_view_and_re_solves_new_material
 #[test]
 fn batch_resume_reruns_only_the_missing_adaptive_job_and_gets_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
-    let s = scene_path("cornell_box.toml").display().to_string();
-    let m = "method = \"adaptive\"\n";
-    let jobs = [
-        small_batch_job(&s, "\"a.png\"", 16, m),
-        small_batch_job(&s, "\"b.png\"", 12, &format!("{m}camera = {{ eye = [400.0, 300.0, -600.0] }}")),
-    ]
-    .concat();
-    let jobs_path = dir.path().join("jobs.toml");
-    std::fs::write(&jobs_path, jobs).unwrap();
-    let out = radray(&["batch", jobs_path.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    let jobs = [("a.png", 16, ""), ("b.png", 12, SIDE_VIEW)];
+    adaptive_batch(dir.path(), &jobs, &[]);
     let b = dir.path().join("b.png");
     let first = std::fs::read(&b).unwrap();
     std::fs::remove_file(&b).unwrap();
-    let out = radray(&["batch", jobs_path.to_str().unwrap(), "--resume"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let jobs = manifest(dir.path());
+    let jobs = adaptive_batch(dir.path(), &jobs, &["--resume"]);
     assert_eq!(jobs[0]["from_earlier_run"], true);
     assert_eq!(jobs[1]["status"], "ok");
     assert_ne!(jobs[1]["from_earlier_run"], true);
