@@ -41,13 +41,15 @@ fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
 }
 
 impl Solution {
-    /// Bytes held by the solution (its four arrays and the struct).
+    /// Bytes held by the solution (its four arrays, an adaptive refinement's split indices and the
+    /// struct).
     pub fn memory_bytes(&self) -> u64 {
         let values = self.element_exitance.len()
             + self.element_direct_exitance.len()
             + self.vertex_exitance.len()
             + self.vertex_direct_exitance.len();
-        (values * std::mem::size_of::<Vec3>() + std::mem::size_of::<Solution>()) as u64
+        let splits = self.refinement.as_ref().map_or(0, |r| r.split_count() * std::mem::size_of::<u32>());
+        (values * std::mem::size_of::<Vec3>() + splits + std::mem::size_of::<Solution>()) as u64
     }
 
     /// A solution from per-element exitance and its direct part (however they were solved): adds the
