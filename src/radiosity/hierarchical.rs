@@ -158,6 +158,7 @@ pub fn solution_on_leaves(
         mesh_fingerprint: fingerprint,
         stats,
         leaf_geometry: Some(Arc::new(geometry)),
+        refinement: None,
     };
     (mesh, solution)
 }

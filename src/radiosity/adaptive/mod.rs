@@ -13,6 +13,7 @@
 
 pub mod criterion;
 pub mod hanging;
+pub mod refinement;
 pub mod subdivide;
 pub mod substructure;
 
@@ -31,6 +32,7 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
 use crate::transport::photons::RunPhotons;
+use refinement::Refinement;
 use subdivide::EdgeMidpoints;
 
 /// Changes whenever the method refines or solves differently, so that a cached solution of an
@@ -72,15 +74,6 @@ fn splittable(mesh: &Mesh) -> Vec<bool> {
 impl Adaptive {
     fn params(&self, scene: &SceneDescription) -> RadiosityParams {
         RadiosityParams { solver: self.solver, ..scene.radiosity.clone() }
-    }
-
-    /// The patch mesh: the scene's uniform mesh at `ADAPTIVE_PATCH_FACTOR × max_element_edge`, with
-    /// `textures`, and its buried elements marked.
-    fn patch_mesh(scene: &SceneDescription, textures: Arc<crate::material::SceneTextures>) -> Mesh {
-        let edge = scene.radiosity.max_element_edge;
-        let mut mesh = Mesh::build_with_textures(scene, edge, textures);
-        mesh.element_buried = crate::burial::buried_elements(&mesh);
-        mesh
     }
 
     /// Hemicube form factors of `mesh` (through mirrors and glass when `photons` is given) and the
@@ -196,7 +189,7 @@ impl PassOneMethod for Adaptive {
         let settings = &scene.radiosity.adaptive;
         let mut stats =
             PassOneStats { hemicube_resolution_px: scene.radiosity.hemicube_resolution_px, ..Default::default() };
-        let mut current = Self::patch_mesh(scene, mesh.textures.clone());
+        let mut current = refinement::patch_mesh(scene, mesh.textures.clone());
         let specular = crate::radiosity::specular::mesh_has_specular(&current, &scene.materials);
         let min_edge = scene.radiosity.hierarchy.min_element_size.unwrap_or(scene.diagonal() / 200.0);
         let mut midpoints = EdgeMidpoints::default();
@@ -205,6 +198,7 @@ impl PassOneMethod for Adaptive {
         // the final mesh only.
         let substructure = !specular;
         let mut kept: Option<PartialRows> = None;
+        let mut record = Refinement::default();
         let mut level = 0;
         let solved = loop {
             let last = level == settings.levels;
@@ -256,14 +250,16 @@ impl PassOneMethod for Adaptive {
                     &mut stats,
                 )?;
             }
-            current = subdivide::split(&solved.mesh, &split, &mut midpoints);
-            current.element_buried = crate::burial::buried_elements(&current);
+            current = refinement::split_level(&solved.mesh, &split, &mut midpoints);
+            record.record(&split);
             kept = substructure.then(|| substructure::kept_rows(&solved.mesh, &solved.ff, &split, &current));
             level += 1;
         };
         stats.elements = solved.mesh.elements.len();
         stats.solver = Some(self.name());
         stats.hemicubes_per_second = stats.elements as f64 / stats.form_factor_seconds.max(1e-9);
-        Ok(PassOne { mesh: solved.mesh, solution: solved.solution, stats, reused_form_factors: false })
+        // The file carries the refinement, so `render --solution` rebuilds this mesh (`refinement`).
+        let solution = Solution { refinement: Some(Arc::new(record)), ..solved.solution };
+        Ok(PassOne { mesh: solved.mesh, solution, stats, reused_form_factors: false })
     }
 }
