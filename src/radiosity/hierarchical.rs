@@ -434,7 +434,7 @@ impl PassOneMethod for Hierarchical {
             let hits = shared.hits() as usize;
             progress.note(&format!(
                 "merge: {hits} of {} link estimates from the {} parts ({} held), {} computed here ({} not in \
-                 the parts, the rest near links about to be split)",
+                 the parts; the rest near links to split or kept, not looked up)",
                 log.computed,
                 resume.merge.len(),
                 shared.known_len(),
@@ -522,7 +522,7 @@ impl Hierarchical {
         };
         // Every part names the state its pass was refined from; shard 0's carries it for the next round.
         let state = shared.take_captured();
-        let state_hash = state.as_ref().map_or(0, |s| part_file::state_hash(s));
+        let state_hash = state.as_ref().map_or(0, part_file::state_hash);
         let state = state.filter(|_| shard.index == 0);
         let part = HierarchyPart { pass, entries: shared.take_recorded(), state_hash, state };
         resume::write_hierarchy_part(output, keys, shard, &part).map_err(resume::ShardError::from)?;

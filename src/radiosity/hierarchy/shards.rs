@@ -387,7 +387,6 @@ mod tests {
             s.leaf_exitance.iter().flat_map(|b| b.to_array().map(f32::to_bits)).collect::<Vec<u32>>()
         };
         assert_eq!(bits(&merged), bits(&single), "merged exitance is the single solve's, bit for bit");
-        eprintln!("near {near} hits {} misses {} computed {computed}", merge.hits(), merge.misses());
         assert!(merge.misses() * 100 <= merge.hits(), "misses {} of {}", merge.misses(), merge.hits());
     }
 
