@@ -372,7 +372,7 @@ mod tests {
                 solve_logged(&scene, Default::default(), &params, None, &mut hooks, &mut |_| {}).unwrap();
             (solution, log.computed as u64)
         };
-        let (single, _) = run(None);
+        let (single, single_estimates) = run(None);
         let mut parts = Vec::new();
         for k in 0..2 {
             let shard = SharedEstimates::for_shard(k, 2, 1, Vec::new(), None);
@@ -387,6 +387,7 @@ mod tests {
             s.leaf_exitance.iter().flat_map(|b| b.to_array().map(f32::to_bits)).collect::<Vec<u32>>()
         };
         assert_eq!(bits(&merged), bits(&single), "merged exitance is the single solve's, bit for bit");
+        assert_eq!(computed, single_estimates, "the merge asks for the single solve's estimates");
         assert!(merge.misses() * 100 <= merge.hits(), "misses {} of {}", merge.misses(), merge.hits());
     }
 
