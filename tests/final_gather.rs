@@ -237,16 +237,18 @@ fn bright_patch_box() -> Setup {
 
 #[test]
 fn a_record_seeing_a_small_bright_source_gathers_more_rays_and_errs_less() {
-    // A point on the floor of `bright_patch_box`: the patch fills about 2% of the projected hemisphere
-    // and brings a third of the irradiance, so a 1024-ray gather's error is its edge cells'. With the
-    // default bound the pilot sends (nearly) every seed's record to 4× the rays, and the records'
-    // RMS error against a converged value (four 16384-ray gathers, whose own noise is about 1/16 of a
-    // 1024-ray gather's) falls: a stratified gather's edge variance goes as N^−3/2, so 4× the rays
-    // should take the RMS to about 0.35×; 0.6 leaves room for the RMS's own spread over K = 16 seeds
-    // (relative standard error 1/√(2K) ≈ 18%).
+    // A point on the floor of `bright_patch_box`, under the patch: the patch fills about 2% of the
+    // projected hemisphere and brings a third of the irradiance, so a 1024-ray gather's error is its
+    // edge cells'. The pilot is itself a 64-ray estimate: here its predicted error spreads over
+    // 0.02–0.07 across seeds (measured), so with the default bound 0.04 most records, not all, get
+    // 4× the rays (at least 12 of 16 asked). The records' RMS error against a converged value (four
+    // 16384-ray gathers, whose own noise is about 1/16 of a 1024-ray gather's) then falls: a
+    // stratified gather's edge variance goes as N^−3/2, so 4× the rays take the RMS to about 0.35×;
+    // 0.6 leaves room for the unrefined records and the RMS's own spread over K = 16 seeds (relative
+    // standard error 1/√(2K) ≈ 18%).
     let setup = bright_patch_box();
     let tracer = setup.tracer_with(&one_bounce());
-    let (p, n) = (vec3(0.4, 0.0, 0.55), Vec3::Y);
+    let (p, n) = (vec3(0.7, 0.0, 0.45), Vec3::Y);
     let converged = (0..4).map(|s| gathered(&tracer, p, n, 16384, 500 + s).x).sum::<f32>() / 4.0;
     let base = Strata::for_rays(1024);
     let refinement = GatherRefinement::new(1024, RenderParams::default().gather_refine_error).expect("on by default");
@@ -262,7 +264,7 @@ fn a_record_seeing_a_small_bright_source_gathers_more_rays_and_errs_less() {
         refined += was_refined as u32;
         adaptive_sq += (e.irradiance.x - converged).powi(2);
     }
-    assert!(refined >= 14, "only {refined} of {seeds} records refined");
+    assert!(refined >= 12, "only {refined} of {seeds} records refined");
     let ratio = (adaptive_sq / base_sq).sqrt();
     assert!(ratio <= 0.6, "RMS error ratio refined/base {ratio}");
 }
