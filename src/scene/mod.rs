@@ -160,13 +160,23 @@ pub struct AdaptiveSettings {
     /// Split when an element's corner exitance differs from its own by more than this fraction of its
     /// own exitance, or of a floor relative to the brightest reflected exitance (`adaptive_threshold`).
     pub threshold: f64,
+    /// Whether `method = "auto"` picks the adaptive mesh for scenes the matrix can take
+    /// (`auto_adaptive`, default `AUTO_PREFERS_ADAPTIVE`; `radiosity::method::auto_prefers_adaptive`).
+    pub auto: bool,
 }
 
 impl Default for AdaptiveSettings {
     fn default() -> Self {
-        AdaptiveSettings { levels: 1, threshold: 0.1 }
+        AdaptiveSettings { levels: 1, threshold: 0.1, auto: AUTO_PREFERS_ADAPTIVE }
     }
 }
+
+/// Whether `method = "auto"` solves scenes that stay off the hierarchy, have no mirrors or glass and
+/// store their matrix on the adaptive mesh instead of the uniform one, when the scene does not say
+/// (`auto_adaptive`). Off until its accuracy is measured on every shipped scene: the uniform matrix
+/// keeps their bytes (tests/golden_bytes.rs), and adaptive pays on alcove_hall and cornell_original
+/// but not yet on l_room (closing note of session 8).
+pub const AUTO_PREFERS_ADAPTIVE: bool = false;
 
 /// Which pass-one method solves the scene (`[radiosity] method`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -175,6 +185,8 @@ pub enum MethodChoice {
     /// The full matrix (or matrix-free shooting with `store_form_factors = false`) when its predicted
     /// matrix fits the memory budget and its predicted hemicube CPU time is under
     /// `AUTO_MATRIX_CPU_SECONDS`; the hierarchy otherwise (`radiosity::method::auto_prefers_hierarchy`).
+    /// With `auto_adaptive` (`AUTO_PREFERS_ADAPTIVE`) the matrix's diffuse scenes go to the adaptive
+    /// mesh (`radiosity::method::auto_method`).
     #[default]
     Auto,
     /// The uniform mesh and the full matrix (or matrix-free shooting), whatever the scene's size.

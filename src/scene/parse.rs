@@ -98,6 +98,7 @@ struct RawRadiosity {
     refinement_passes: Option<S<i64>>,
     adaptive_levels: Option<S<i64>>,
     adaptive_threshold: Option<S<f64>>,
+    auto_adaptive: Option<bool>,
 }
 
 /// `memory = 8000000000` or `memory = "8GB"`.
@@ -569,6 +570,9 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
     a.levels = loc.positive_int(&r.adaptive_levels, "adaptive_levels", 0, 6, a.levels)?;
     if let Some(t) = loc.ranged(&r.adaptive_threshold, "adaptive_threshold", |x| x > 0.0 && x <= 1.0, "in (0, 1]")? {
         a.threshold = t;
+    }
+    if let Some(b) = r.auto_adaptive {
+        a.auto = b;
     }
     Ok(())
 }
