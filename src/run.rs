@@ -661,7 +661,10 @@ pub fn tracer_for<'a>(
     };
     let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad, &on_level_done);
     stats.secondary_rays += prepass.rays.total();
-    stage.finish(&format!("{} records from {} gathers", prepass.records, prepass.candidates));
+    stage.finish(&format!(
+        "{} records ({} refined) from {} gathers",
+        prepass.records, prepass.refined, prepass.candidates
+    ));
     Ok(tracer.with_final_gather(gather))
 }
 
