@@ -2,6 +2,7 @@
 //! solved, with the suspicious geometry that usually causes light leaks.
 
 use crate::mesh;
+use crate::radiosity::adaptive::Adaptive;
 use crate::radiosity::method::PassOneMethod;
 use crate::radiosity::{hierarchical, hierarchy, method};
 use crate::scene::{MethodChoice, SceneDescription};
@@ -26,8 +27,7 @@ pub struct InfoReport {
     pub max_element_edge: f32,
     pub hemicube_resolution_px: u32,
     pub solver: String,
-    /// The pass-one method the scene will use, and for `method = "auto"` why
-    /// (`method::auto_prefers_hierarchy`).
+    /// The pass-one method the scene will use, and for `method = "auto"` why (`method::auto_method`).
     pub pass_one_method: String,
     pub emitters: Vec<EmitterInfo>,
     /// Predicted size of the form-factor matrix (`radiosity::form_factors::estimate`).
@@ -106,10 +106,15 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
 fn pass_one_method(scene: &SceneDescription) -> String {
     // `auto` meshes the scene and draws a sample of hemicubes: ask it once.
     let (name, why) = match scene.radiosity.method {
-        MethodChoice::Auto => match method::auto_prefers_hierarchy(scene) {
-            Some(reason) => (hierarchical::Hierarchical.name(), format!(" (auto: {reason})")),
-            None => (method::for_params(&scene.radiosity).name(), " (auto: the uniform mesh fits)".to_string()),
-        },
+        MethodChoice::Auto => {
+            let (choice, reason) = method::auto_method(scene);
+            let name = match choice {
+                MethodChoice::Hierarchical => hierarchical::Hierarchical.name(),
+                MethodChoice::Adaptive => Adaptive { solver: scene.radiosity.solver }.name(),
+                MethodChoice::Matrix | MethodChoice::Auto => method::for_params(&scene.radiosity).name(),
+            };
+            (name, format!(" (auto: {reason})"))
+        }
         _ => (method::for_scene(scene).name(), String::new()),
     };
     let size = if name == "hierarchical" {

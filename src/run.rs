@@ -22,11 +22,12 @@ use crate::material::SceneTextures;
 use crate::mesh::{self, Mesh};
 use crate::output::{self, Exposure, OutputError, ToneCurve};
 use crate::progress::{Progress, Verbosity};
+use crate::radiosity::adaptive::refinement;
 use crate::radiosity::hierarchical;
 use crate::radiosity::matrix::rows_file::RowsFileError;
 use crate::radiosity::method::{self, MethodError, Reuse, ShardMethod};
 use crate::radiosity::resume::{self, Checkpointer, Resume, ShardError};
-use crate::radiosity::solution_file::{self, SolutionFileError};
+use crate::radiosity::solution_file::{self, SolutionFileError, SolutionMesh};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
 use crate::scene::{self, FinalGatherMode, Overrides, SceneDescription, SceneError};
@@ -348,28 +349,51 @@ impl Runner {
     }
 }
 
-/// A saved solution and the mesh it lives on: the leaf mesh it carries (hierarchical), or the scene's
-/// uniform mesh; refused when its fingerprint is not the scene's.
+/// A saved solution and the mesh it lives on: the leaf mesh it carries (hierarchical), the scene's
+/// patch mesh refined as it records (adaptive), or the scene's uniform mesh; refused when its
+/// fingerprint is not the scene's.
 fn load_solution(scene: &SceneDescription, path: &Path, progress: &Progress) -> Result<(Mesh, Arc<Solution>), Failure> {
-    if solution_file::carries_leaf_mesh(path)? {
+    let kind = solution_file::solution_mesh(path)?;
+    if kind == SolutionMesh::Refined {
+        let textures = Arc::new(load_textures(scene, progress));
+        let mut mesh = None;
+        let solution = Solution::load_with(path, |loaded| {
+            let refinement = loaded.refinement.as_deref().cloned().unwrap_or_default();
+            let refined = refinement::mesh_of(scene, &refinement, textures)
+                .map_err(|source| SolutionFileError::StaleRefinement { path: path.to_path_buf(), source })?;
+            let expected = fingerprint::fingerprint(&refined, &scene.materials);
+            mesh = Some(refined);
+            Ok(expected)
+        })?;
+        let mesh =
+            mesh.ok_or_else(|| Failure::internal(anyhow::anyhow!("{}: refined mesh missing", path.display())))?;
+        check_solution_fits(path, &mesh, &solution)?;
+        return Ok((mesh, Arc::new(solution)));
+    }
+    if kind == SolutionMesh::Leaves {
         let textures = Arc::new(load_textures(scene, progress));
         let expected = hierarchical::scene_fingerprint(scene, &hierarchical::hierarchy_params(scene), &textures);
         let solution = Solution::load(path, expected)?;
         let mesh = hierarchical::mesh_of(scene, &solution, textures)
             .ok_or_else(|| Failure::internal(anyhow::anyhow!("{}: leaf mesh missing", path.display())))?;
-        if mesh.positions.len() != solution.vertex_exitance.len()
-            || mesh.elements.len() != solution.element_exitance.len()
-        {
-            return Err(Failure::input(anyhow::anyhow!(
-                "{}: the leaf mesh it carries does not match its values; re-run `radray solve`",
-                path.display()
-            )));
-        }
+        check_solution_fits(path, &mesh, &solution)?;
         return Ok((mesh, Arc::new(solution)));
     }
     let mesh = build_mesh(scene, progress)?;
     let solution = Solution::load(path, fingerprint::fingerprint(&mesh, &scene.materials))?;
     Ok((mesh, Arc::new(solution)))
+}
+
+/// Refuses a loaded solution whose value counts are not its own mesh's (element and vertex counts).
+fn check_solution_fits(path: &Path, mesh: &Mesh, solution: &Solution) -> Result<(), Failure> {
+    if mesh.positions.len() != solution.vertex_exitance.len() || mesh.elements.len() != solution.element_exitance.len()
+    {
+        return Err(Failure::input(anyhow::anyhow!(
+            "{}: the mesh it carries does not match its values; re-run `radray solve`",
+            path.display()
+        )));
+    }
+    Ok(())
 }
 
 /// Pass one of a single run (see `Runner::pass_one`), adding what it measured to `stats`; hand the
@@ -637,7 +661,10 @@ pub fn tracer_for<'a>(
     };
     let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad, &on_level_done);
     stats.secondary_rays += prepass.rays.total();
-    stage.finish(&format!("{} records from {} gathers", prepass.records, prepass.candidates));
+    stage.finish(&format!(
+        "{} records ({} refined) from {} gathers",
+        prepass.records, prepass.refined, prepass.candidates
+    ));
     Ok(tracer.with_final_gather(gather))
 }
 

@@ -11,7 +11,9 @@ use std::path::Path;
 use glam::{DVec3, Vec3};
 use radray::mesh::Mesh;
 use radray::radiosity::fingerprint::fingerprint;
-use radray::radiosity::solution_file::{SolutionFileError, FILE_MAGIC, FILE_VERSION, FILE_VERSION_LEAF_MESH};
+use radray::radiosity::solution_file::{
+    SolutionFileError, FILE_MAGIC, FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_REFINED_MESH,
+};
 use radray::radiosity::solver::{self, Shooter};
 use radray::radiosity::{FormFactors, Solution};
 use radray::scene::{Material, RadiosityParams, SceneDescription, SolverKind, Surface};
@@ -494,8 +496,9 @@ fn foreign_file_is_refused() {
 
 #[test]
 fn unsupported_version_is_refused() {
-    // The next version after every one this radray reads (2, and 3 for hierarchical leaf meshes).
-    let next = FILE_VERSION.max(FILE_VERSION_LEAF_MESH) + 1;
+    // The next version after every one this radray reads (2, 3 for hierarchical leaf meshes, 4 for
+    // adaptive refined meshes).
+    let next = FILE_VERSION.max(FILE_VERSION_LEAF_MESH).max(FILE_VERSION_REFINED_MESH) + 1;
     let err = load_damaged(|b| b[FILE_MAGIC.len()..FILE_MAGIC.len() + 4].copy_from_slice(&next.to_le_bytes()), 0);
     assert!(
         matches!(err, SolutionFileError::UnsupportedVersion { found, supported: FILE_VERSION, .. } if found == next),

@@ -158,6 +158,7 @@ pub fn solution_on_leaves(
         mesh_fingerprint: fingerprint,
         stats,
         leaf_geometry: Some(Arc::new(geometry)),
+        refinement: None,
     };
     (mesh, solution)
 }
@@ -433,11 +434,13 @@ impl PassOneMethod for Hierarchical {
         if let Some(shared) = &shared {
             let hits = shared.hits() as usize;
             progress.note(&format!(
-                "merge: {hits} of {} link estimates from the {} parts ({} held), {} computed here",
+                "merge: {hits} of {} link estimates from the {} parts ({} held), {} computed here ({} not in \
+                 the parts; the rest near links to split or kept, not looked up)",
                 log.computed,
                 resume.merge.len(),
                 shared.known_len(),
-                log.computed - hits
+                log.computed - hits,
+                shared.misses()
             ));
             resume_stats = Some(ResumeStats {
                 rows_resumed: hits,
@@ -520,16 +523,17 @@ impl Hierarchical {
         };
         // Every part names the state its pass was refined from; shard 0's carries it for the next round.
         let state = shared.take_captured();
-        let state_hash = state.as_ref().map_or(0, |s| part_file::state_hash(&s.encode()));
+        let state_hash = state.as_ref().map_or(0, part_file::state_hash);
         let state = state.filter(|_| shard.index == 0);
         let part = HierarchyPart { pass, entries: shared.take_recorded(), state_hash, state };
         resume::write_hierarchy_part(output, keys, shard, &part).map_err(resume::ShardError::from)?;
         stage.finish(&format!(
-            "shard {}/{} of pass {pass}: {} links estimated ({} from the parts), {} of them shared",
+            "shard {}/{} of pass {pass}: {} links estimated ({} from the parts, {} not in them), {} shared",
             shard.index,
             shard.count,
             log.computed,
             shared.hits(),
+            shared.misses(),
             part.entries.len()
         ));
         Ok(PassOneStats {

@@ -169,20 +169,47 @@ pub fn for_params(params: &RadiosityParams) -> Box<dyn PassOneMethod> {
 }
 
 /// The scene's method (`[radiosity] method`): `matrix` is `for_params`; `hierarchical` is
-/// `Hierarchical`; `auto` is `for_params` unless `auto_prefers_hierarchy` says the uniform mesh is
-/// out of reach.
+/// `Hierarchical`; `adaptive` is `Adaptive`; `auto` is what `auto_method` picks.
 pub fn for_scene(scene: &SceneDescription) -> Box<dyn PassOneMethod> {
-    let hierarchical = match scene.radiosity.method {
-        MethodChoice::Matrix => false,
-        MethodChoice::Hierarchical => true,
-        MethodChoice::Auto => auto_prefers_hierarchy(scene).is_some(),
-        MethodChoice::Adaptive => return Box::new(super::adaptive::Adaptive { solver: scene.radiosity.solver }),
+    let choice = match scene.radiosity.method {
+        MethodChoice::Auto => auto_method(scene).0,
+        chosen => chosen,
     };
-    if hierarchical {
-        Box::new(Hierarchical)
-    } else {
-        for_params(&scene.radiosity)
+    match choice {
+        MethodChoice::Hierarchical => Box::new(Hierarchical),
+        MethodChoice::Adaptive => Box::new(super::adaptive::Adaptive { solver: scene.radiosity.solver }),
+        MethodChoice::Matrix | MethodChoice::Auto => for_params(&scene.radiosity),
     }
+}
+
+/// What `method = "auto"` picks for `scene`, and why: the hierarchy when `auto_prefers_hierarchy`
+/// says the uniform mesh is out of reach, else the adaptive mesh when `auto_prefers_adaptive` says
+/// so, else the uniform mesh's matrix (`MethodChoice::Matrix`: `for_params`).
+pub fn auto_method(scene: &SceneDescription) -> (MethodChoice, String) {
+    if let Some(reason) = auto_prefers_hierarchy(scene) {
+        return (MethodChoice::Hierarchical, reason);
+    }
+    match auto_prefers_adaptive(scene) {
+        Some(reason) => (MethodChoice::Adaptive, reason),
+        None => (MethodChoice::Matrix, "the uniform mesh fits".to_string()),
+    }
+}
+
+/// Why `method = "auto"` takes the adaptive mesh for a scene the uniform matrix can take (the caller
+/// has asked `auto_prefers_hierarchy` first), or `None` to keep the uniform mesh: only when
+/// `auto_adaptive` is on (`AUTO_PREFERS_ADAPTIVE` unless the scene says), the matrix is stored
+/// (`store_form_factors`), and the uniform mesh has no mirrors or glass (the adaptive levels before
+/// the last are solved without extended form factors, so their splits miss light through them).
+pub fn auto_prefers_adaptive(scene: &SceneDescription) -> Option<String> {
+    let params = &scene.radiosity;
+    if !params.adaptive.auto || !params.store_form_factors {
+        return None;
+    }
+    let mesh = Mesh::build(scene, params.max_element_edge);
+    if specular::mesh_has_specular(&mesh, &scene.materials) {
+        return None;
+    }
+    Some("the uniform mesh fits, no mirrors or glass, and auto_adaptive is on".to_string())
 }
 
 /// Why `method = "auto"` leaves the uniform mesh for the hierarchy, or `None` to keep it. With
@@ -551,13 +578,15 @@ pub enum ShardMethod {
 }
 
 /// The scene's method for `--shard` and `--merge`: the stored matrix on the uniform mesh, or the
-/// hierarchy; else `ShardError::NotMatrix`.
+/// hierarchy; else `ShardError::NotMatrix` (matrix-free shooting, and the adaptive mesh, whose levels
+/// each need the whole solve of the level before).
 pub fn shard_method(scene: &SceneDescription) -> Result<ShardMethod, ShardError> {
     let method = for_scene(scene);
-    // The full matrix is the one method on the uniform mesh that checkpoints.
+    // The full matrix is the one method on the uniform mesh that checkpoints, the hierarchy the one
+    // off it.
     if method.uses_uniform_mesh() && method.checkpoints() && scene.radiosity.store_form_factors {
         Ok(ShardMethod::Matrix(FullMatrix { solver: scene.radiosity.solver }))
-    } else if !method.uses_uniform_mesh() {
+    } else if !method.uses_uniform_mesh() && method.checkpoints() {
         Ok(ShardMethod::Hierarchy(Hierarchical))
     } else {
         Err(ShardError::NotMatrix { scene: scene.path.display().to_string(), method: method.name() })

@@ -6,6 +6,7 @@
 //! pass two reads.
 
 pub mod adaptive;
+pub mod boundary_vertices;
 pub mod fingerprint;
 pub mod hemicube;
 pub mod hierarchical;

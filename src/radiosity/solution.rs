@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
 
+use super::adaptive::refinement::Refinement;
 use super::fingerprint::fingerprint;
 use super::leaf_mesh::LeafGeometry;
 use crate::mesh::Mesh;
@@ -30,6 +31,9 @@ pub struct Solution {
     /// For a hierarchical solution: the leaf elements it lives on (pass two's mesh is built from them,
     /// `leaf_mesh::build`); `None` for a solution on the scene's uniform mesh.
     pub leaf_geometry: Option<Arc<LeafGeometry>>,
+    /// For an adaptive solution: the levels of splits that made its mesh from the scene's patch mesh
+    /// (`adaptive::refinement::mesh_of` rebuilds it); `None` otherwise.
+    pub refinement: Option<Arc<Refinement>>,
 }
 
 fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
@@ -37,13 +41,15 @@ fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
 }
 
 impl Solution {
-    /// Bytes held by the solution (its four arrays and the struct).
+    /// Bytes held by the solution (its four arrays, an adaptive refinement's split indices and the
+    /// struct).
     pub fn memory_bytes(&self) -> u64 {
         let values = self.element_exitance.len()
             + self.element_direct_exitance.len()
             + self.vertex_exitance.len()
             + self.vertex_direct_exitance.len();
-        (values * std::mem::size_of::<Vec3>() + std::mem::size_of::<Solution>()) as u64
+        let splits = self.refinement.as_ref().map_or(0, |r| r.split_count() * std::mem::size_of::<u32>());
+        (values * std::mem::size_of::<Vec3>() + splits + std::mem::size_of::<Solution>()) as u64
     }
 
     /// A solution from per-element exitance and its direct part (however they were solved): adds the
@@ -64,6 +70,7 @@ impl Solution {
             mesh_fingerprint: fingerprint(mesh, materials),
             stats,
             leaf_geometry: None,
+            refinement: None,
         }
     }
 
@@ -83,6 +90,7 @@ impl Solution {
                 converged: true,
             },
             leaf_geometry: None,
+            refinement: None,
         }
     }
 

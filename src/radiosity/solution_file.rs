@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use std::sync::Arc;
 
+use super::adaptive::refinement::{LevelSplits, Refinement, RefinementError};
 use super::fingerprint::fnv1a64;
 use super::leaf_mesh::LeafGeometry;
 use super::solution::Solution;
@@ -23,6 +24,20 @@ pub const FILE_VERSION: u32 = 2;
 /// Version of a file that also carries the leaf mesh of a hierarchical solution (`LeafGeometry`):
 /// version 2's layout with the leaf counts after the header and the leaf section before the checksum.
 pub const FILE_VERSION_LEAF_MESH: u32 = 3;
+/// Version of a file that also carries the refinement of an adaptive solution (`Refinement`): version
+/// 2's layout with the level and split counts after the header and the levels before the checksum.
+pub const FILE_VERSION_REFINED_MESH: u32 = 4;
+
+/// Which mesh a solution file's values live on, read from its format version.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SolutionMesh {
+    /// The scene's uniform mesh (version 2).
+    Uniform,
+    /// The leaf mesh of a hierarchical solution, which the file carries (version 3).
+    Leaves,
+    /// The scene's patch mesh refined as the file's adaptive refinement says (version 4).
+    Refined,
+}
 
 /// Why a solution file could not be written or read. Every message names the file.
 #[derive(Debug, thiserror::Error)]
@@ -47,6 +62,8 @@ pub enum SolutionFileError {
          (file's fingerprint {found:016x}, current scene's {expected:016x})"
     )]
     Stale { path: PathBuf, expected: u64, found: u64 },
+    #[error("{path}: the adaptive mesh it carries does not fit the current scene ({source}); re-run `radray solve`")]
+    StaleRefinement { path: PathBuf, source: RefinementError },
 }
 
 impl Solution {
@@ -73,13 +90,23 @@ impl Solution {
     /// after the header (at 56) the leaf mesh's position count p and leaf count t (u64 each), and
     /// before the checksum 12p leaf positions (3 × f32), 12t leaf corners (3 × u32), 4t scene surfaces
     /// (u32) and t back-side flags (u8, 0 or 1); t equals n.
+    ///
+    /// An adaptive solution (with `refinement`) is written as version `FILE_VERSION_REFINED_MESH`:
+    /// after the header (at 56) the level count L and the total split count S (u64 each), and before
+    /// the checksum, per level, the element count of the mesh it split and its split count (u64 each),
+    /// then the S split element indices (u32, ascending within a level, levels in order).
     pub fn to_bytes(&self) -> Vec<u8> {
         let (n, m) = (self.element_exitance.len(), self.vertex_exitance.len());
         assert!(self.element_direct_exitance.len() == n && self.vertex_direct_exitance.len() == m);
         let h = self.stats.residual_history.len();
         let mut out = Vec::with_capacity(HEADER_BYTES + 8 * h + 24 * (n + m) + 8);
         out.extend_from_slice(&FILE_MAGIC);
-        let version = if self.leaf_geometry.is_some() { FILE_VERSION_LEAF_MESH } else { FILE_VERSION };
+        assert!(self.leaf_geometry.is_none() || self.refinement.is_none(), "a solution has one own mesh");
+        let version = match (&self.leaf_geometry, &self.refinement) {
+            (Some(_), _) => FILE_VERSION_LEAF_MESH,
+            (None, Some(_)) => FILE_VERSION_REFINED_MESH,
+            (None, None) => FILE_VERSION,
+        };
         out.extend_from_slice(&version.to_le_bytes());
         out.extend_from_slice(&(n as u64).to_le_bytes());
         out.extend_from_slice(&(m as u64).to_le_bytes());
@@ -91,6 +118,10 @@ impl Solution {
         if let Some(g) = &self.leaf_geometry {
             out.extend_from_slice(&(g.positions.len() as u64).to_le_bytes());
             out.extend_from_slice(&(g.triangles.len() as u64).to_le_bytes());
+        }
+        if let Some(r) = &self.refinement {
+            out.extend_from_slice(&(r.levels.len() as u64).to_le_bytes());
+            out.extend_from_slice(&(r.split_count() as u64).to_le_bytes());
         }
         for r in &self.stats.residual_history {
             out.extend_from_slice(&r.to_le_bytes());
@@ -116,6 +147,15 @@ impl Solution {
             }
             out.extend(g.back.iter().map(|&b| b as u8));
         }
+        if let Some(r) = &self.refinement {
+            for level in &r.levels {
+                out.extend_from_slice(&level.elements.to_le_bytes());
+                out.extend_from_slice(&(level.split.len() as u64).to_le_bytes());
+            }
+            for e in r.levels.iter().flat_map(|l| &l.split) {
+                out.extend_from_slice(&e.to_le_bytes());
+            }
+        }
         let checksum = fnv1a64(&out);
         out.extend_from_slice(&checksum.to_le_bytes());
         out
@@ -125,6 +165,17 @@ impl Solution {
     /// order: magic, version, length against the header's counts, checksum, then that the solution
     /// belongs to the mesh with `expected_fingerprint`. Never panics, whatever the bytes.
     pub fn from_bytes(bytes: &[u8], path: &Path, expected_fingerprint: u64) -> Result<Solution, SolutionFileError> {
+        Solution::from_bytes_with(bytes, path, |_| Ok(expected_fingerprint))
+    }
+
+    /// `from_bytes` for a solution whose expected fingerprint depends on what the file carries (the
+    /// mesh an adaptive refinement rebuilds): `expected` is asked with the parsed solution, after
+    /// every check of the file itself, and may refuse it.
+    pub fn from_bytes_with(
+        bytes: &[u8],
+        path: &Path,
+        expected: impl FnOnce(&Solution) -> Result<u64, SolutionFileError>,
+    ) -> Result<Solution, SolutionFileError> {
         let path = || path.to_path_buf();
         let corrupted = |reason: &str| SolutionFileError::Corrupted { path: path(), reason: reason.to_string() };
         if bytes.len() < FILE_MAGIC.len() || bytes[..FILE_MAGIC.len()] != FILE_MAGIC {
@@ -137,7 +188,7 @@ impl Solution {
             actual_bytes: bytes.len() as u64,
         };
         let version = r.u32().ok_or_else(truncated_header)?;
-        if version != FILE_VERSION && version != FILE_VERSION_LEAF_MESH {
+        if ![FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_REFINED_MESH].contains(&version) {
             return Err(SolutionFileError::UnsupportedVersion {
                 path: path(),
                 found: version,
@@ -152,27 +203,35 @@ impl Solution {
         let converged = r.u32().ok_or_else(truncated_header)?;
         let h = r.u64().ok_or_else(truncated_header)?;
         let leaf_mesh = version == FILE_VERSION_LEAF_MESH;
+        let refined = version == FILE_VERSION_REFINED_MESH;
         let (p, t) = if leaf_mesh {
             (r.u64().ok_or_else(truncated_header)?, r.u64().ok_or_else(truncated_header)?)
         } else {
             (0, 0)
         };
+        let (levels, splits) = if refined {
+            (r.u64().ok_or_else(truncated_header)?, r.u64().ok_or_else(truncated_header)?)
+        } else {
+            (0, 0)
+        };
         // Total length from the header's counts, in u128 so that no count can overflow it.
-        let expected = HEADER_BYTES as u128
-            + if leaf_mesh { 16 } else { 0 }
+        let expected_bytes = HEADER_BYTES as u128
+            + if leaf_mesh || refined { 16 } else { 0 }
             + 8 * h as u128
             + 24 * (n as u128 + m as u128)
             + 12 * p as u128
             + 17 * t as u128
+            + 16 * levels as u128
+            + 4 * splits as u128
             + 8;
-        if (bytes.len() as u128) < expected {
+        if (bytes.len() as u128) < expected_bytes {
             return Err(SolutionFileError::Truncated {
                 path: path(),
-                expected_bytes: expected.min(u64::MAX as u128) as u64,
+                expected_bytes: expected_bytes.min(u64::MAX as u128) as u64,
                 actual_bytes: bytes.len() as u64,
             });
         }
-        if bytes.len() as u128 > expected {
+        if bytes.len() as u128 > expected_bytes {
             return Err(corrupted("bytes past the end of the data"));
         }
         let body = bytes.len() - 8;
@@ -194,13 +253,6 @@ impl Solution {
         if leaf_mesh && t != n {
             return Err(corrupted("leaf count differs from element count"));
         }
-        if found_fingerprint != expected_fingerprint {
-            return Err(SolutionFileError::Stale {
-                path: path(),
-                expected: expected_fingerprint,
-                found: found_fingerprint,
-            });
-        }
         // The length check above guarantees every read below succeeds.
         let (n, m, h) = (n as usize, m as usize, h as usize);
         let residual_history = (0..h).map(|_| r.f64()).collect::<Option<Vec<f64>>>();
@@ -218,8 +270,24 @@ impl Solution {
                 return Err(corrupted("leaf corner past the leaf positions"));
             }
         }
-        match (residual_history, element_exitance, element_direct_exitance, vertex_exitance, vertex_direct_exitance) {
-            (Some(residual_history), Some(ee), Some(ed), Some(ve), Some(vd)) => Ok(Solution {
+        let refinement = if refined {
+            let refinement = read_refinement(&mut r, levels as usize, splits as usize)
+                .ok_or_else(|| corrupted("level split counts differ from the total"))?;
+            if !refinement.is_consistent() {
+                return Err(corrupted("refinement levels are inconsistent"));
+            }
+            Some(refinement)
+        } else {
+            None
+        };
+        let solution = match (
+            residual_history,
+            element_exitance,
+            element_direct_exitance,
+            vertex_exitance,
+            vertex_direct_exitance,
+        ) {
+            (Some(residual_history), Some(ee), Some(ed), Some(ve), Some(vd)) => Solution {
                 element_exitance: ee,
                 element_direct_exitance: ed,
                 vertex_exitance: ve,
@@ -227,9 +295,19 @@ impl Solution {
                 mesh_fingerprint: found_fingerprint,
                 stats: SolveStats { solver, iterations, residual_history, converged },
                 leaf_geometry: leaf_geometry.map(Arc::new),
-            }),
-            _ => Err(corrupted("data shorter than its header says")),
+                refinement: refinement.map(Arc::new),
+            },
+            _ => return Err(corrupted("data shorter than its header says")),
+        };
+        let expected_fingerprint = expected(&solution)?;
+        if found_fingerprint != expected_fingerprint {
+            return Err(SolutionFileError::Stale {
+                path: path(),
+                expected: expected_fingerprint,
+                found: found_fingerprint,
+            });
         }
+        Ok(solution)
     }
 
     /// Writes the solution atomically (see `to_bytes` for the layout).
@@ -244,6 +322,30 @@ impl Solution {
         let bytes = std::fs::read(path).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
         Solution::from_bytes(&bytes, path, expected_fingerprint)
     }
+
+    /// `load` with the expected fingerprint asked of the parsed solution (see `from_bytes_with`).
+    pub fn load_with(
+        path: &Path,
+        expected: impl FnOnce(&Solution) -> Result<u64, SolutionFileError>,
+    ) -> Result<Solution, SolutionFileError> {
+        let bytes = std::fs::read(path).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
+        Solution::from_bytes_with(&bytes, path, expected)
+    }
+}
+
+/// The refinement section of a version-4 file: `levels` (elements, split count) pairs, then the
+/// `splits` indices; `None` when the levels' counts do not add up to `splits`.
+fn read_refinement(r: &mut Reader, levels: usize, splits: usize) -> Option<Refinement> {
+    let counts = (0..levels).map(|_| Some((r.u64()?, r.u64()?))).collect::<Option<Vec<_>>>()?;
+    let total = counts.iter().try_fold(0u64, |sum, &(_, k)| sum.checked_add(k))?;
+    if total != splits as u64 {
+        return None;
+    }
+    let levels = counts
+        .into_iter()
+        .map(|(elements, k)| Some(LevelSplits { elements, split: (0..k).map(|_| r.u32()).collect::<Option<_>>()? }))
+        .collect::<Option<Vec<_>>>()?;
+    Some(Refinement { levels })
 }
 
 /// The leaf section of a version-3 file: p positions, t corners, surfaces and back flags.
@@ -261,17 +363,22 @@ fn read_leaf_geometry(r: &mut Reader, p: usize, t: usize) -> Option<LeafGeometry
     Some(LeafGeometry { positions, triangles, surface, back })
 }
 
-/// Whether the solution file at `path` carries a leaf mesh (a hierarchical solution), read from its
-/// version field; a file too short or foreign says no here and is refused by `Solution::load`.
-pub fn carries_leaf_mesh(path: &Path) -> Result<bool, SolutionFileError> {
+/// Which mesh the solution file at `path` lives on, read from its version field; a file too short or
+/// foreign says `Uniform` here and is refused by `Solution::load`.
+pub fn solution_mesh(path: &Path) -> Result<SolutionMesh, SolutionFileError> {
     use std::io::Read;
     let mut head = [0u8; 12];
     let mut file =
         std::fs::File::open(path).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
     let read = file.read(&mut head).map_err(|source| SolutionFileError::Io { path: path.to_path_buf(), source })?;
-    Ok(read == 12
-        && head[..8] == FILE_MAGIC
-        && u32::from_le_bytes([head[8], head[9], head[10], head[11]]) == FILE_VERSION_LEAF_MESH)
+    if read < 12 || head[..8] != FILE_MAGIC {
+        return Ok(SolutionMesh::Uniform);
+    }
+    Ok(match u32::from_le_bytes([head[8], head[9], head[10], head[11]]) {
+        FILE_VERSION_LEAF_MESH => SolutionMesh::Leaves,
+        FILE_VERSION_REFINED_MESH => SolutionMesh::Refined,
+        _ => SolutionMesh::Uniform,
+    })
 }
 
 /// Bytes before the residual history.
@@ -341,6 +448,7 @@ mod tests {
                 converged: true,
             },
             leaf_geometry: None,
+            refinement: None,
         }
     }
 
@@ -352,6 +460,55 @@ mod tests {
             back: vec![false, true],
         };
         Solution { leaf_geometry: Some(Arc::new(geometry)), ..sample() }
+    }
+
+    /// Two levels: elements 0 and 1 of 2 patches split (2 + 3·2 = 8 elements), then element 7.
+    fn sample_with_refinement() -> Solution {
+        let levels = vec![LevelSplits { elements: 2, split: vec![0, 1] }, LevelSplits { elements: 8, split: vec![7] }];
+        Solution { refinement: Some(Arc::new(Refinement { levels })), ..sample() }
+    }
+
+    #[test]
+    fn a_refinement_round_trips_as_version_4() {
+        let s = sample_with_refinement();
+        let bytes = s.to_bytes();
+        assert_eq!(bytes[8..12], FILE_VERSION_REFINED_MESH.to_le_bytes());
+        let back = Solution::from_bytes(&bytes, Path::new("x"), s.mesh_fingerprint).unwrap();
+        assert_eq!(back.refinement, s.refinement);
+        assert_eq!(back.to_bytes(), bytes);
+    }
+
+    #[test]
+    fn the_expected_fingerprint_may_come_from_the_refinement_and_refuse_it() {
+        let s = sample_with_refinement();
+        let bytes = s.to_bytes();
+        let seen = Solution::from_bytes_with(&bytes, Path::new("x"), |loaded| {
+            assert_eq!(loaded.refinement, s.refinement);
+            Ok(s.mesh_fingerprint)
+        });
+        assert!(seen.is_ok());
+        let refused = Solution::from_bytes_with(&bytes, Path::new("x"), |_| {
+            Err(SolutionFileError::StaleRefinement {
+                path: "x".into(),
+                source: RefinementError::ElementCount { level: 0, recorded: 2, found: 3 },
+            })
+        });
+        assert!(matches!(refused, Err(SolutionFileError::StaleRefinement { .. })), "{refused:?}");
+        let stale = Solution::from_bytes_with(&bytes, Path::new("x"), |_| Ok(s.mesh_fingerprint ^ 1));
+        assert!(matches!(stale, Err(SolutionFileError::Stale { .. })), "{stale:?}");
+    }
+
+    #[test]
+    fn inconsistent_levels_are_corrupted_even_with_a_valid_checksum() {
+        // Level 1 claims 9 elements where level 0's two splits make 8: rewrite it and re-sum.
+        let mut bytes = sample_with_refinement().to_bytes();
+        bytes.truncate(bytes.len() - 8);
+        let levels_at = bytes.len() - 4 * 3 - 16 * 2;
+        bytes[levels_at + 16..levels_at + 24].copy_from_slice(&9u64.to_le_bytes());
+        let checksum = fnv1a64(&bytes);
+        bytes.extend_from_slice(&checksum.to_le_bytes());
+        let e = Solution::from_bytes(&bytes, Path::new("x"), sample().mesh_fingerprint).unwrap_err();
+        assert!(matches!(e, SolutionFileError::Corrupted { .. }), "{e:?}");
     }
 
     #[test]
@@ -379,15 +536,17 @@ mod tests {
         #[test]
         fn parser_never_panics_on_arbitrary_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {
             let _ = Solution::from_bytes(&bytes, Path::new("random"), 0);
-            let mut with_magic = FILE_MAGIC.to_vec();
-            with_magic.extend_from_slice(&FILE_VERSION.to_le_bytes());
-            with_magic.extend_from_slice(&bytes);
-            let _ = Solution::from_bytes(&with_magic, Path::new("random"), 0);
+            for version in [FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_REFINED_MESH] {
+                let mut with_magic = FILE_MAGIC.to_vec();
+                with_magic.extend_from_slice(&version.to_le_bytes());
+                with_magic.extend_from_slice(&bytes);
+                let _ = Solution::from_bytes(&with_magic, Path::new("random"), 0);
+            }
         }
 
         #[test]
-        fn any_single_byte_change_or_truncation_is_refused(at in 0usize..1000, flip in 1u8..=255, cut in 0usize..1000, leaves in any::<bool>()) {
-            let s = if leaves { sample_with_leaves() } else { sample() };
+        fn any_single_byte_change_or_truncation_is_refused(at in 0usize..1000, flip in 1u8..=255, cut in 0usize..1000, own_mesh in 0u8..3) {
+            let s = match own_mesh { 0 => sample(), 1 => sample_with_leaves(), _ => sample_with_refinement() };
             let bytes = s.to_bytes();
             let mut mutated = bytes.clone();
             let at = at % bytes.len();

@@ -42,6 +42,18 @@ pub struct PassOneStats {
     /// What the checkpoint, shard or merge of the matrix method did (absent for plain runs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub resume: Option<ResumeStats>,
+    /// What the adaptive method did (absent for the other methods).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adaptive: Option<AdaptiveStats>,
+}
+
+/// The levels of `method = "adaptive"`: elements solved at each, form-factor rows computed by
+/// hemicubes and rows kept from the level before (substructuring).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct AdaptiveStats {
+    pub elements_per_level: Vec<usize>,
+    pub rows_computed: usize,
+    pub rows_kept: usize,
 }
 
 /// Rows taken from a checkpoint or merged parts and rows computed by this run, and the checkpoint

@@ -160,13 +160,23 @@ pub struct AdaptiveSettings {
     /// Split when an element's corner exitance differs from its own by more than this fraction of its
     /// own exitance, or of a floor relative to the brightest reflected exitance (`adaptive_threshold`).
     pub threshold: f64,
+    /// Whether `method = "auto"` picks the adaptive mesh for scenes the matrix can take
+    /// (`auto_adaptive`, default `AUTO_PREFERS_ADAPTIVE`; `radiosity::method::auto_prefers_adaptive`).
+    pub auto: bool,
 }
 
 impl Default for AdaptiveSettings {
     fn default() -> Self {
-        AdaptiveSettings { levels: 1, threshold: 0.1 }
+        AdaptiveSettings { levels: 1, threshold: 0.1, auto: AUTO_PREFERS_ADAPTIVE }
     }
 }
+
+/// Whether `method = "auto"` solves scenes that stay off the hierarchy, have no mirrors or glass and
+/// store their matrix on the adaptive mesh instead of the uniform one, when the scene does not say
+/// (`auto_adaptive`). Off until its accuracy is measured on every shipped scene: the uniform matrix
+/// keeps their bytes (tests/golden_bytes.rs), and adaptive pays on alcove_hall and cornell_original
+/// but not yet on l_room (closing note of session 8).
+pub const AUTO_PREFERS_ADAPTIVE: bool = false;
 
 /// Which pass-one method solves the scene (`[radiosity] method`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -175,6 +185,8 @@ pub enum MethodChoice {
     /// The full matrix (or matrix-free shooting with `store_form_factors = false`) when its predicted
     /// matrix fits the memory budget and its predicted hemicube CPU time is under
     /// `AUTO_MATRIX_CPU_SECONDS`; the hierarchy otherwise (`radiosity::method::auto_prefers_hierarchy`).
+    /// With `auto_adaptive` (`AUTO_PREFERS_ADAPTIVE`) the matrix's diffuse scenes go to the adaptive
+    /// mesh (`radiosity::method::auto_method`).
     #[default]
     Auto,
     /// The uniform mesh and the full matrix (or matrix-free shooting), whatever the scene's size.
@@ -314,6 +326,9 @@ pub struct RenderParams {
     pub near_bounce: f32,
     /// Rays of the secondary gather at a near hit.
     pub near_bounce_rays: u32,
+    /// A cache record whose pilot gather predicts a relative standard error above this gathers
+    /// `REFINE_FACTOR` × `gather_rays` (`trace::gather::refine`); 0 keeps every record at `gather_rays`.
+    pub gather_refine_error: f32,
     /// Shadow rays per diffuse hit when `direct = Pixel` (and per Phong highlight), shared by all
     /// emitters: each ray goes to a point chosen over the emitters' total area, not one per emitter.
     pub light_samples: u32,
@@ -321,6 +336,19 @@ pub struct RenderParams {
     /// Paths whose throughput falls below this (max channel) are dropped.
     pub min_throughput: f32,
 }
+
+/// `near_bounce` by default, in hit-element sizes (√area). Was 1: on gap_room (a room lit through a
+/// door gap, default preset, 256²) the gather then read interpolated exitance of elements that
+/// straddle the direct light's sharp edges through the gap 0.3–0.6 m away, and the floor beside the
+/// door jamb came out 5% too bright, the wall beside the back corner 2%; 2.5 re-estimates those hits
+/// at the point (docs/accuracy.md, "gap_room against a converged reference").
+pub const DEFAULT_NEAR_BOUNCE: f32 = 2.5;
+
+/// `gather_refine_error` by default. On gap_room (default preset, 256², seeds 1 / 2, relMSE against
+/// the converged image) off gives 0.00046 / 0.00061; 0.04 refines 30% of the records and gives
+/// 0.00035 / 0.00047 for about +20% CPU-s; 0.02 refines half of them for +30% (0.00043 / 0.00039)
+/// (docs/accuracy.md, "gap_room against a converged reference").
+pub const DEFAULT_GATHER_REFINE_ERROR: f32 = 0.04;
 
 /// `cache_accuracy` of the default preset (and of a scene with no preset). Measured on alcove_hall at
 /// the default preset, 256², in one run (docs/accuracy.md, "A cheaper default preset"): 0.25 gives
@@ -342,8 +370,9 @@ impl Default for RenderParams {
             final_gather: FinalGatherMode::On,
             gather_rays: 1024,
             cache_accuracy: DEFAULT_CACHE_ACCURACY,
-            near_bounce: 1.0,
+            near_bounce: DEFAULT_NEAR_BOUNCE,
             near_bounce_rays: 2,
+            gather_refine_error: DEFAULT_GATHER_REFINE_ERROR,
             light_samples: DEFAULT_LIGHT_SAMPLES,
             max_depth: 8,
             min_throughput: 1e-3,

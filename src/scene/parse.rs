@@ -98,6 +98,7 @@ struct RawRadiosity {
     refinement_passes: Option<S<i64>>,
     adaptive_levels: Option<S<i64>>,
     adaptive_threshold: Option<S<f64>>,
+    auto_adaptive: Option<bool>,
 }
 
 /// `memory = 8000000000` or `memory = "8GB"`.
@@ -117,6 +118,7 @@ struct RawRender {
     cache_accuracy: Option<S<f32>>,
     near_bounce: Option<S<f32>>,
     near_bounce_rays: Option<S<i64>>,
+    gather_refine_error: Option<S<f32>>,
     light_samples: Option<S<i64>>,
     max_depth: Option<S<i64>>,
     min_throughput: Option<S<f32>>,
@@ -569,6 +571,9 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
     if let Some(t) = loc.ranged(&r.adaptive_threshold, "adaptive_threshold", |x| x > 0.0 && x <= 1.0, "in (0, 1]")? {
         a.threshold = t;
     }
+    if let Some(b) = r.auto_adaptive {
+        a.auto = b;
+    }
     Ok(())
 }
 
@@ -591,6 +596,11 @@ fn render_params(loc: &Locator, raw: Option<&RawRender>, base: RenderParams) -> 
         p.near_bounce = k;
     }
     p.near_bounce_rays = loc.positive_int(&r.near_bounce_rays, "near_bounce_rays", 1, 256, p.near_bounce_rays)?;
+    if let Some(e) =
+        loc.ranged(&r.gather_refine_error, "gather_refine_error", |x| x >= 0.0, "a non-negative relative error")?
+    {
+        p.gather_refine_error = e;
+    }
     p.light_samples = loc.positive_int(&r.light_samples, "light_samples", 1, 4096, p.light_samples)?;
     p.max_depth = loc.positive_int(&r.max_depth, "max_depth", 1, 256, p.max_depth)?;
     if let Some(t) = loc.ranged(&r.min_throughput, "min_throughput", |x| (0.0..1.0).contains(&x), "in [0, 1)")? {

@@ -148,6 +148,7 @@ pub fn solution(mesh: &Mesh, exitance: Vec<Vec3>, direct: Vec<Vec3>) -> Solution
             converged: true,
         },
         leaf_geometry: None,
+        refinement: None,
     }
 }
 

@@ -19,6 +19,12 @@ pub fn brightest_reflected_exitance(mesh: &Mesh, element_exitance: &[Vec3]) -> f
         .fold(0.0, f32::max)
 }
 
+/// The length of element e's longest edge.
+fn longest_edge(mesh: &Mesh, e: usize) -> f32 {
+    let p: Vec<Vec3> = mesh.elements.polygon(&mesh.positions, e).collect();
+    (0..p.len()).map(|k| (p[k] - p[(k + 1) % p.len()]).length()).fold(0.0, f32::max)
+}
+
 /// Splits element e when
 ///   max_k max_channel |B_v(k) − B_e| > τ · max(max_channel B_e, f · B_ref)
 /// over its corners k (B_v the vertex exitance, conforming at hanging vertices; B_e its own exitance),
@@ -45,21 +51,61 @@ pub fn elements_to_split(
             if !splittable[e] || limit <= 0.0 {
                 return false;
             }
-            let corners: Vec<u32> = mesh.elements.corners[e].into_iter().filter(|&v| v != crate::mesh::NONE).collect();
-            let longest = (0..corners.len())
-                .map(|k| {
-                    let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
-                    (mesh.positions[a as usize] - mesh.positions[b as usize]).length()
-                })
-                .fold(0.0, f32::max);
-            if longest < 2.0 * min_edge {
+            if longest_edge(mesh, e) < 2.0 * min_edge {
                 return false;
             }
-            let variation = corners
+            let variation = mesh.elements.corners[e]
                 .iter()
+                .filter(|&&v| v != crate::mesh::NONE)
                 .map(|&v| (vertex_exitance[v as usize] - element_exitance[e]).abs().max_element())
                 .fold(0.0, f32::max);
             variation > limit
         })
         .collect()
+}
+
+/// Refinement carried across concave edges: marks for splitting every element e that may be split
+/// (`splittable`, longest edge at least twice `min_edge`) and faces, across a concave corner, an
+/// element s of another surface that `split` already marks — the two touch (their bounding spheres
+/// about their centres overlap), are not coplanar (|nₑ·nₛ| < 0.99) and each lies in front of the
+/// other ((cₛ − cₑ)·nₑ > 0 and (cₑ − cₛ)·nₛ > 0). Where a surface's exitance runs steeply into a
+/// concave edge (the ceiling above a wall lamp, dark at the wall), the surface across the edge sees it
+/// at grazing angles and its exitance dips within a fraction of an element of the edge, though its
+/// own elements' values are flat; only smaller elements there show the dip. One step: elements
+/// marked here do not carry the marking further.
+pub fn across_concave_edges(mesh: &Mesh, split: &[bool], min_edge: f32, splittable: &[bool]) -> Vec<bool> {
+    let e = &mesh.elements;
+    let radius: Vec<f32> = (0..e.len())
+        .map(|i| e.polygon(&mesh.positions, i).map(|p| (p - e.centre[i]).length()).fold(0.0, f32::max))
+        .collect();
+    let cell = 2.0 * radius.iter().copied().fold(0.0, f32::max);
+    let mut out = split.to_vec();
+    if !(cell > 0.0) || !split.iter().any(|&s| s) {
+        return out;
+    }
+    let key = |p: Vec3| (p / cell).floor().as_ivec3();
+    let mut grid: rustc_hash::FxHashMap<glam::IVec3, Vec<u32>> = Default::default();
+    for s in (0..e.len()).filter(|&s| split[s]) {
+        grid.entry(key(e.centre[s])).or_default().push(s as u32);
+    }
+    for i in 0..e.len() {
+        if split[i] || !splittable[i] || longest_edge(mesh, i) < 2.0 * min_edge {
+            continue;
+        }
+        let k = key(e.centre[i]);
+        let touches = (-1..=1).flat_map(|x| (-1..=1).flat_map(move |y| (-1..=1).map(move |z| glam::ivec3(x, y, z))));
+        let facing = touches.filter_map(|o| grid.get(&(k + o))).flatten().any(|&s| {
+            let s = s as usize;
+            let d = e.centre[s] - e.centre[i];
+            e.surface[s] != e.surface[i]
+                && d.length() < radius[i] + radius[s]
+                && e.normal[i].dot(e.normal[s]).abs() < 0.99
+                && d.dot(e.normal[i]) > 0.0
+                && d.dot(e.normal[s]) < 0.0
+        });
+        if facing {
+            out[i] = true;
+        }
+    }
+    out
 }

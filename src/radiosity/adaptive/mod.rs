@@ -1,21 +1,26 @@
 //! `method = "adaptive"`: the full matrix on a mesh refined where the solution needs it (Cohen,
 //! Greenberg, Immel and Brock 1986; Ashdown, *Radiosity: A Programmer's Perspective*, ch. 7). The
-//! scene is meshed into patches of `ADAPTIVE_PATCH_FACTOR × max_element_edge` and solved with
-//! hemicubes and the scene's solver; elements whose solution varies across them (`criterion`) are
-//! split into four (`subdivide`); the finer mesh is solved again, up to `adaptive_levels` times. A
-//! hanging vertex takes its edge's interpolated value (`hanging`), so the image has no T-vertex
-//! cracks. Every level is a plain `FullMatrix`-style solve, so the bytes are the same at any thread
-//! count; light through mirrors and glass (extended form factors, photons) is followed on the final
-//! mesh only, the levels before it are plain.
+//! scene is meshed into patches at `max_element_edge` and solved with hemicubes and the scene's
+//! solver; elements whose solution varies across them (`criterion`), and the elements facing them
+//! across concave edges, are split into four (`subdivide`); the finer mesh is solved again, up to
+//! `adaptive_levels` times. Each level keeps the form-factor rows of the elements it did not split
+//! (`substructure`), so it draws hemicubes only for the new children. Boundary vertices are
+//! extrapolated from the elements inside (`boundary_vertices`) and a hanging vertex takes its edge's
+//! interpolated value (`hanging`), so the image has no T-vertex cracks. Every level is a plain
+//! row-independent matrix solve, so the bytes are the same at any thread count; light through
+//! mirrors and glass (extended form factors, photons) is followed on the final mesh only: with them,
+//! the levels before it are plain, at half the hemicube resolution, and no rows are kept.
 
 pub mod criterion;
 pub mod hanging;
+pub mod refinement;
 pub mod subdivide;
+pub mod substructure;
 
 use std::sync::Arc;
 use std::time::Instant;
 
-use super::matrix::{form_factors, RowPlan};
+use super::matrix::{form_factors, FormFactors, PartialRows, RowPlan};
 use super::method::{
     check_matrix_fits, form_factor_bytes_bound, specular_accel, specular_paths, MethodError, PassOne, PassOneMethod,
     Reuse,
@@ -27,7 +32,13 @@ use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
 use crate::transport::photons::RunPhotons;
+use refinement::Refinement;
 use subdivide::EdgeMidpoints;
+
+/// Changes whenever the method refines or solves differently, so that a cached solution of an
+/// older revision is not taken for this one's (2: substructuring, extrapolated boundary vertices,
+/// refinement carried across concave edges).
+const REVISION: u64 = 2;
 
 /// Hemicube resolution the deciding levels never go below.
 const MIN_PROBE_RESOLUTION_PX: u32 = 32;
@@ -42,6 +53,7 @@ pub struct Adaptive {
 struct Level {
     mesh: Mesh,
     solution: Solution,
+    ff: FormFactors,
 }
 
 /// Elements no refinement may split: both sides of two-sided surfaces (the back side mirrors the
@@ -64,15 +76,6 @@ impl Adaptive {
         RadiosityParams { solver: self.solver, ..scene.radiosity.clone() }
     }
 
-    /// The patch mesh: the scene's uniform mesh at `ADAPTIVE_PATCH_FACTOR × max_element_edge`, with
-    /// `textures`, and its buried elements marked.
-    fn patch_mesh(scene: &SceneDescription, textures: Arc<crate::material::SceneTextures>) -> Mesh {
-        let edge = scene.radiosity.max_element_edge;
-        let mut mesh = Mesh::build_with_textures(scene, edge, textures);
-        mesh.element_buried = crate::burial::buried_elements(&mesh);
-        mesh
-    }
-
     /// Hemicube form factors of `mesh` (through mirrors and glass when `photons` is given) and the
     /// solve, with conforming values at the hanging vertices.
     #[allow(clippy::too_many_arguments)]
@@ -82,14 +85,15 @@ impl Adaptive {
         mesh: Mesh,
         midpoints: &EdgeMidpoints,
         photons: Option<&RunPhotons>,
+        kept: Option<&PartialRows>,
         level: u32,
-        last: bool,
+        full_resolution: bool,
         progress: &Progress,
         stats: &mut PassOneStats,
     ) -> Result<Level, MethodError> {
         check_matrix_fits(scene, &mesh, form_factor_bytes_bound(&mesh, &scene.radiosity))?;
         let mut params = self.params(scene);
-        if !last {
+        if !full_resolution {
             // Levels that only decide where to split see the scene at half the hemicube resolution.
             params.hemicube_resolution_px = (params.hemicube_resolution_px / 2).max(MIN_PROBE_RESOLUTION_PX);
         }
@@ -101,7 +105,12 @@ impl Adaptive {
             (Some(accel), Some(photons)) => Some(specular_paths(scene, &mesh, accel, photons)),
             _ => None,
         };
-        let rows = form_factors::compute_planned(&mesh, &params, paths.as_ref(), RowPlan::all(), &|| stage.inc(1));
+        let plan = RowPlan { known: kept, selected: &|_| true, stop: &|| false, after_batch: None };
+        let rows = form_factors::compute_planned(&mesh, &params, paths.as_ref(), plan, &|| stage.inc(1));
+        let adaptive = stats.adaptive.get_or_insert_with(Default::default);
+        adaptive.elements_per_level.push(mesh.elements.len());
+        adaptive.rows_kept += kept.map_or(0, PartialRows::done_count);
+        adaptive.rows_computed += rows.done.len() - kept.map_or(0, PartialRows::done_count);
         let ff = rows.ff;
         let seconds = start.elapsed().as_secs_f64();
         stage.finish(&format!(
@@ -121,10 +130,17 @@ impl Adaptive {
         stats.solve_seconds += start.elapsed().as_secs_f64();
         stats.sweeps += solution.stats.iterations;
         stats.final_residual = solution.stats.residual_history.last().copied().unwrap_or(0.0);
+        // Boundary vertices extrapolated from the elements inside (`boundary_vertices`), then the
+        // hanging ones given their edge's value.
+        let boundary = super::boundary_vertices::boundary_vertices(&mesh, &|a, b| midpoints.get(a, b));
+        let s = &mut solution;
+        super::boundary_vertices::extrapolate(&mesh, &s.element_exitance, &boundary, &mut s.vertex_exitance);
+        let direct = &s.element_direct_exitance;
+        super::boundary_vertices::extrapolate(&mesh, direct, &boundary, &mut s.vertex_direct_exitance);
         let hanging = hanging::hanging_vertices(&mesh, midpoints);
         hanging::conform(&mut solution.vertex_exitance, &hanging);
         hanging::conform(&mut solution.vertex_direct_exitance, &hanging);
-        Ok(Level { mesh, solution })
+        Ok(Level { mesh, solution, ff })
     }
 }
 
@@ -145,9 +161,13 @@ impl PassOneMethod for Adaptive {
         let a = &scene.radiosity.adaptive;
         let min_edge = scene.radiosity.hierarchy.min_element_size.unwrap_or(scene.diagonal() / 200.0);
         let mut h = super::fingerprint::solution_key(&patches, &scene.materials, &self.params(scene));
-        for x in
-            [a.levels as u64, a.threshold.to_bits(), min_edge.to_bits() as u64, u64::from(criterion::FLOOR.to_bits())]
-        {
+        for x in [
+            a.levels as u64,
+            a.threshold.to_bits(),
+            min_edge.to_bits() as u64,
+            u64::from(criterion::FLOOR.to_bits()),
+            REVISION,
+        ] {
             h = (h ^ x).wrapping_mul(0x100000001b3);
         }
         h
@@ -169,16 +189,32 @@ impl PassOneMethod for Adaptive {
         let settings = &scene.radiosity.adaptive;
         let mut stats =
             PassOneStats { hemicube_resolution_px: scene.radiosity.hemicube_resolution_px, ..Default::default() };
-        let mut current = Self::patch_mesh(scene, mesh.textures.clone());
+        let mut current = refinement::patch_mesh(scene, mesh.textures.clone());
         let specular = crate::radiosity::specular::mesh_has_specular(&current, &scene.materials);
         let min_edge = scene.radiosity.hierarchy.min_element_size.unwrap_or(scene.diagonal() / 200.0);
         let mut midpoints = EdgeMidpoints::default();
+        // Substructuring: every level is solved at full resolution and the next keeps the rows of
+        // the elements it did not split. Not with mirrors or glass: their extended rows are made on
+        // the final mesh only.
+        let substructure = !specular;
+        let mut kept: Option<PartialRows> = None;
+        let mut record = Refinement::default();
         let mut level = 0;
         let solved = loop {
             let last = level == settings.levels;
             let with_photons = (last && specular).then_some(photons);
-            let solved =
-                self.solve_level(scene, current, &midpoints, with_photons, level, last, progress, &mut stats)?;
+            let full = last || substructure;
+            let solved = self.solve_level(
+                scene,
+                current,
+                &midpoints,
+                with_photons,
+                kept.as_ref(),
+                level,
+                full,
+                progress,
+                &mut stats,
+            )?;
             if last {
                 break solved;
             }
@@ -192,21 +228,38 @@ impl PassOneMethod for Adaptive {
                 min_edge,
                 &splittable(&solved.mesh),
             );
+            let split = criterion::across_concave_edges(&solved.mesh, &split, min_edge, &splittable(&solved.mesh));
             let count = split.iter().filter(|&&s| s).count();
             let over_limit = solved.mesh.elements.len() as u64 + 3 * count as u64 > crate::run::MAX_ELEMENTS;
             if count == 0 || over_limit {
+                if substructure {
+                    break solved; // already solved in full
+                }
                 // That level was solved only to decide where to split (plain, at half resolution):
                 // solve the final mesh once more, in full, with its paths through mirrors and glass.
                 let photons = specular.then_some(photons);
-                break self.solve_level(scene, solved.mesh, &midpoints, photons, level, true, progress, &mut stats)?;
+                break self.solve_level(
+                    scene,
+                    solved.mesh,
+                    &midpoints,
+                    photons,
+                    None,
+                    level,
+                    true,
+                    progress,
+                    &mut stats,
+                )?;
             }
-            current = subdivide::split(&solved.mesh, &split, &mut midpoints);
-            current.element_buried = crate::burial::buried_elements(&current);
+            current = refinement::split_level(&solved.mesh, &split, &mut midpoints);
+            record.record(&split);
+            kept = substructure.then(|| substructure::kept_rows(&solved.mesh, &solved.ff, &split, &current));
             level += 1;
         };
         stats.elements = solved.mesh.elements.len();
         stats.solver = Some(self.name());
         stats.hemicubes_per_second = stats.elements as f64 / stats.form_factor_seconds.max(1e-9);
-        Ok(PassOne { mesh: solved.mesh, solution: solved.solution, stats, reused_form_factors: false })
+        // The file carries the refinement, so `render --solution` rebuilds this mesh (`refinement`).
+        let solution = Solution { refinement: Some(Arc::new(record)), ..solved.solution };
+        Ok(PassOne { mesh: solved.mesh, solution, stats, reused_form_factors: false })
     }
 }

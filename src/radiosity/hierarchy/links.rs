@@ -168,6 +168,22 @@ pub fn refinement_error(nodes: &Nodes, link: &LinkRecord) -> f64 {
     link_error_power(nodes, r, s, link.spread) + source_variation_power(nodes, r, s, coefficient)
 }
 
+/// For a near link (`is_near`) about to be split: its spread, the bound `near_spread` capped at
+/// `spread_cap`, when the link's error with it exceeds `threshold_w` (`estimate` then leaves F
+/// unestimated, NaN); `None` when the link would be kept and needs its form factor. Reads the
+/// source's exitance, so unlike the estimate itself it depends on the pass.
+pub fn near_split_pending(
+    nodes: &Nodes,
+    receiver: usize,
+    source: usize,
+    spread_cap: f32,
+    threshold_w: f64,
+) -> Option<f32> {
+    let spread = near_spread(nodes, receiver, source).min(spread_cap);
+    let record = LinkRecord { receiver: receiver as u32, source: source as u32, form_factor: 0.0, spread };
+    (refinement_error(nodes, &record) > threshold_w).then_some(spread)
+}
+
 /// Whether the point-to-point cluster formula may stand for link (receiver ← source) at all: always
 /// for two elements (their estimator is exact in the source); with a cluster end, only when the ends'
 /// bounding spheres are disjoint and neither sphere crosses an element end's plane. Other links are
@@ -225,11 +241,10 @@ pub fn estimate(
         return Some((f as f32, (spread as f32).min(spread_cap)));
     }
     if is_near(nodes, receiver, source) {
-        let spread = near_spread(nodes, receiver, source).min(spread_cap);
-        let record = LinkRecord { receiver: receiver as u32, source: source as u32, form_factor: 0.0, spread };
-        if refinement_error(nodes, &record) > threshold_w {
+        if let Some(spread) = near_split_pending(nodes, receiver, source, spread_cap, threshold_w) {
             return Some((f32::NAN, spread));
         }
+        let spread = near_spread(nodes, receiver, source).min(spread_cap);
         let f = near_form_factor(nodes, ctx, receiver, source)?;
         return Some((f, spread + near_push_spread(nodes, ctx, receiver, source, f)));
     }
@@ -345,6 +360,41 @@ pub fn near_form_factor(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize,
     }
     let v = link_visibility(ctx, nodes, receiver, source).visible as f64;
     Some((v * sum / nodes.area[receiver] as f64).min(1.0) as f32)
+}
+
+/// What `near_form_factor` of link (receiver ← source) reads of the subdivision below its ends: when
+/// it integrates leaf pair by leaf pair (at most `EXACT_NEAR_PAIRS`), the `subdivision_shape` of each
+/// end; otherwise `[0, 0]` (the ray-traced estimator samples input triangles, which subdivision does
+/// not change). With the ends' tree paths it identifies the estimate exactly: a shard that split
+/// fewer elements below an end than the whole solve gets another shape.
+pub fn near_leaf_shapes(nodes: &Nodes, receiver: usize, source: usize) -> [u128; 2] {
+    let (mut rs, mut ss) = (Vec::new(), Vec::new());
+    let small = leaves_below(nodes, receiver, EXACT_NEAR_PAIRS, &mut rs)
+        && leaves_below(nodes, source, EXACT_NEAR_PAIRS, &mut ss)
+        && rs.len() * ss.len() <= EXACT_NEAR_PAIRS;
+    if !small {
+        return [0, 0];
+    }
+    [subdivision_shape(nodes, receiver), subdivision_shape(nodes, source)]
+}
+
+/// The 1→4 subdivisions below `node` (which holds at most `EXACT_NEAR_PAIRS` leaves) as a bit string:
+/// every element below it in a fixed depth-first order, 1 if it is split and 0 if it is a leaf,
+/// clusters passed through without a bit (their children are fixed by the build), then a closing 1.
+/// A preorder code of a tree whose splits all have four children is prefix-free, so two shapes below
+/// the same node never share a code; 64 leaves need at most 64 + 21 bits.
+fn subdivision_shape(nodes: &Nodes, node: usize) -> u128 {
+    let (mut code, mut bits) = (0u128, 0u32);
+    let mut stack = vec![node];
+    while let Some(n) = stack.pop() {
+        if !nodes.is_cluster[n] {
+            assert!(bits < 127, "more than {EXACT_NEAR_PAIRS} leaves below node {node}");
+            code |= (!nodes.is_leaf(n) as u128) << bits;
+            bits += 1;
+        }
+        stack.extend(nodes.children(n));
+    }
+    code | (1 << bits)
 }
 
 /// Collects the leaf elements below `node` into `out`; false (and stops) past `limit` leaves.

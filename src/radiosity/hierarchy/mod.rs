@@ -407,9 +407,6 @@ pub fn solve_logged(
     };
     solve::reset_to_emission(&mut nodes, root);
     let build_nodes = nodes.len();
-    if let Some(shared) = hooks.shared {
-        shared.assign_receivers(&nodes, root);
-    }
     // A shard (`shards`) stops after refining its pass for its receivers.
     let shard_pass = hooks.shared.and_then(|s| s.shard_pass());
     // A shard or merge of a later round starts from the state the round before handed on.
@@ -423,6 +420,10 @@ pub fn solve_logged(
             for pass in first_pass..=params.refinement_passes {
                 if let Some(shared) = hooks.shared {
                     shared.begin_pass(pass);
+                    if shard_pass == Some(pass) {
+                        // By the links of the pass before, which this pass re-refines.
+                        shared.assign_receivers(&nodes, root, &links);
+                    }
                     if shard_pass == Some(pass) && pass > 1 {
                         shared.capture(solved_state::SolvedState::capture(
                             &nodes,

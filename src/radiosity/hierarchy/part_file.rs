@@ -4,8 +4,9 @@
 //! (`matrix::rows_file`, kind `HierarchyShardPart`: same header, checksum and atomic write).
 //!
 //! Payload, little-endian: pass u32, entries n u64, then per entry: receiver path and source path (each: root
-//! u32, depth u32, steps u128), spread cap f32, present u8 (0: the estimate was `None`), form factor
-//! f32, spread f32; then the state's hash u64 (FNV-1a 64 of its encoding; 0 in pass 1, which starts
+//! u32, depth u32, steps u128), spread cap f32, leaf shapes u8 (1: the receiver's and the source's
+//! `near_leaf_shapes` follow, u128 each; 0: both are 0), present u8 (0: the estimate was `None`), form
+//! factor f32, spread f32; then the state's hash u64 (FNV-1a 64 of its encoding; 0 in pass 1, which starts
 //! from the emission), present u8, and when present the state's encoding to the end.
 
 use std::path::Path;
@@ -14,12 +15,12 @@ use super::links_file::{push_value, read_value};
 use super::shards::{EstimateKey, SharedEstimate};
 use super::solved_state::SolvedState;
 use super::tree_path::{TreePath, MAX_EXACT_DEPTH};
-use crate::radiosity::fingerprint::fnv1a64;
+use crate::radiosity::fingerprint::{fnv1a64, Fnv1a64};
 use crate::radiosity::matrix::rows_file::{self, Payload, RowsFileError, RowsHeader, RowsKind};
 
-/// Bytes of one path and of one entry.
+/// Bytes of one path and the fewest of one entry (no leaf shapes).
 const PATH_BYTES: usize = 4 + 4 + 16;
-const ENTRY_BYTES: usize = 2 * PATH_BYTES + 4 + 1 + 4 + 4;
+const ENTRY_BYTES: usize = 2 * PATH_BYTES + 4 + 1 + 1 + 4 + 4;
 
 fn wrong_kind(path: &Path, found: RowsKind) -> RowsFileError {
     RowsFileError::WrongKind { path: path.to_path_buf(), found, expected: "hierarchical link estimates of a shard" }
@@ -35,9 +36,26 @@ pub struct HierarchyPart {
     pub state: Option<SolvedState>,
 }
 
-/// The hash a part gives the state it was refined from (see the module header).
-pub fn state_hash(encoded: &[u8]) -> u64 {
-    fnv1a64(encoded)
+/// The hash a part gives the state it was refined from (see the module header), streamed over its
+/// encoding (`SolvedState::write_to`) without building it.
+pub fn state_hash(state: &SolvedState) -> u64 {
+    let mut sink = HashSink(Fnv1a64::default());
+    state.write_to(&mut sink).unwrap_or_else(|_| unreachable!("hashing does not fail"));
+    sink.0.finish()
+}
+
+/// A `Write` that only hashes what it is given.
+struct HashSink(Fnv1a64);
+
+impl std::io::Write for HashSink {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        self.0.write(bytes);
+        Ok(bytes.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
 }
 
 /// Writes `part` under `header` (whose kind must be `HierarchyShardPart`) to `path`, atomically.
@@ -58,13 +76,19 @@ pub fn write(path: &Path, header: &RowsHeader, part: &HierarchyPart) -> Result<(
                 bytes.extend_from_slice(&p.steps.to_le_bytes());
             }
             bytes.extend_from_slice(&key.spread_cap_bits.to_le_bytes());
+            let shaped = (key.receiver_leaves, key.source_leaves) != (0, 0);
+            bytes.push(shaped as u8);
+            if shaped {
+                bytes.extend_from_slice(&key.receiver_leaves.to_le_bytes());
+                bytes.extend_from_slice(&key.source_leaves.to_le_bytes());
+            }
             push_value(&mut bytes, *value);
             out.write_all(&bytes)?;
         }
         out.write_all(&part.state_hash.to_le_bytes())?;
         out.write_all(&[part.state.is_some() as u8])?;
         if let Some(state) = &part.state {
-            out.write_all(&state.encode())?;
+            state.write_to(out)?;
         }
         Ok(())
     })
@@ -96,14 +120,19 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, HierarchyPart), R
         let receiver = tree_path(&mut r)?;
         let source = tree_path(&mut r)?;
         let spread_cap_bits = r.u32()?;
+        let [receiver_leaves, source_leaves] = match r.u8()? {
+            0 => [0, 0],
+            1 => [u128_of(&mut r)?, u128_of(&mut r)?],
+            f => return Err(r.damaged(format!("leaf shapes flag {f}"))),
+        };
         let value = read_value(&mut r)?;
-        entries.push((EstimateKey { receiver, source, spread_cap_bits }, value));
+        entries.push((EstimateKey { receiver, source, spread_cap_bits, receiver_leaves, source_leaves }, value));
     }
     let state_hash = r.u64()?;
     let state = match r.u8()? {
         0 => None,
         1 => {
-            if self::state_hash(r.rest()) != state_hash {
+            if fnv1a64(r.rest()) != state_hash {
                 return Err(r.damaged("a solved state that does not match its hash".into()));
             }
             let state = SolvedState::decode(&mut r)?;
@@ -121,11 +150,15 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<(RowsHeader, HierarchyPart), R
 fn tree_path(r: &mut Payload) -> Result<TreePath, RowsFileError> {
     let root = r.u32()?;
     let depth = r.u32()?;
-    let steps = u128::from_le_bytes(r.take(16)?.try_into().unwrap_or([0; 16]));
+    let steps = u128_of(r)?;
     if depth > MAX_EXACT_DEPTH {
         return Err(r.damaged(format!("a tree path {depth} levels deep")));
     }
     Ok(TreePath { root, depth, steps })
+}
+
+fn u128_of(r: &mut Payload) -> Result<u128, RowsFileError> {
+    Ok(u128::from_le_bytes(r.take(16)?.try_into().unwrap_or([0; 16])))
 }
 
 #[cfg(test)]
@@ -143,10 +176,19 @@ mod tests {
             shard_count: 3,
         };
         let path = |root, depth, steps| TreePath { root, depth, steps };
-        let key = |r, s, cap: f32| EstimateKey { receiver: r, source: s, spread_cap_bits: cap.to_bits() };
+        let key = |r, s, cap: f32| EstimateKey {
+            receiver: r,
+            source: s,
+            spread_cap_bits: cap.to_bits(),
+            receiver_leaves: 0,
+            source_leaves: 0,
+        };
+        let near =
+            EstimateKey { receiver_leaves: 0b1_0010, source_leaves: 1 << 85, ..key(path(4, 1, 2), path(6, 0, 0), 0.5) };
         let entries = vec![
             (key(path(3, 0, 0), path(4, 2, 0b1110), 1.0), Some((0.25, 0.5))),
             (key(path(5, 64, u128::MAX), path(4, 0, 0), f32::INFINITY), None),
+            (near, Some((0.125, 0.75))),
         ];
         let state = SolvedState {
             pass: 1,
@@ -164,7 +206,8 @@ mod tests {
             gathered: vec![DVec3::ZERO; 9],
             exitance_mean: vec![2.0; 9],
         };
-        let state_hash = state_hash(&state.encode());
+        let state_hash = state_hash(&state);
+        assert_eq!(state_hash, fnv1a64(&state.encode()), "the streamed hash is the encoding's");
         (header, HierarchyPart { pass: 2, entries, state_hash, state: Some(state) })
     }
 

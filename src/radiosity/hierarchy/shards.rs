@@ -7,13 +7,16 @@
 //! child of it, so a shard that drops the new links of receivers it does not own refines its own
 //! receivers' links exactly as far as the whole solve, as long as the decisions do not look beyond the
 //! link. They do not (within a pass, the exitance is the one every shard solved alike, and pieces
-//! made in it inherit their parent's), except near links, whose form
-//! factor integrates over the leaves found below their ends when they are estimated, and the memory
-//! budget. So a shard records only *pure* estimates: links that are not near (element ← element, far
-//! links with a cluster end), a function of the two paths, the parent's spread cap and the scene. The
-//! merge is the whole solve, taking each pure estimate from the shards when they hold it and computing
-//! everything else (near links, later passes, what the budget or a near link made differ): its bytes
-//! are those of a single-machine solve by construction.
+//! made in it inherit their parent's), except near links, whose form factor integrates over the
+//! leaves found below their ends when they are estimated, and the memory budget. So an estimate is
+//! keyed by what it depends on (`EstimateKey`): the two paths, the parent's spread cap and, for a
+//! near link integrated leaf pair by leaf pair, the shapes of the subdivision below both ends
+//! (`links::near_leaf_shapes`), since in its own pass a shard splits only its receivers and may see
+//! fewer leaves below a source than the whole solve. A near link about to be split (its F left NaN)
+//! depends on the pass's exitance instead; it costs no rays and is neither recorded nor looked up.
+//! The merge is the whole solve, taking each estimate from the shards when they hold its key and
+//! computing everything else (what the budget or another subdivision made differ): its bytes are
+//! those of a single-machine solve by construction.
 //!
 //! Rounds hand on their solved state (`solved_state`): a shard of round p ≥ 2 starts from the state
 //! of pass p − 2 in round p − 1's parts (or from the emission for p = 2), refines pass p − 1 whole
@@ -26,20 +29,25 @@ use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Mutex, OnceLock};
 
-use super::links::{estimate, is_near};
+use super::links::Links;
+use super::links::{estimate, is_near, near_leaf_shapes, near_split_pending};
 use super::nodes::Nodes;
 use super::solved_state::SolvedState;
 use super::tree_path::TreePath;
 use super::visibility::VisibilityContext;
 use crate::rng::splitmix64;
 
-/// A link estimate's identity: both ends' paths and the spread cap it inherited (`links::estimate`
-/// caps its spread there). Everything else it depends on is fixed by the scene and its settings.
+/// A link estimate's identity: both ends' paths, the spread cap it inherited (`links::estimate`
+/// caps its spread there) and, for a near link integrated leaf pair by leaf pair, the subdivision
+/// below each end (`links::near_leaf_shapes`; 0 otherwise). Everything else it depends on is fixed by
+/// the scene and its settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct EstimateKey {
     pub receiver: TreePath,
     pub source: TreePath,
     pub spread_cap_bits: u32,
+    pub receiver_leaves: u128,
+    pub source_leaves: u128,
 }
 
 /// A pure estimate and its value ((form factor, spread), or `None`: the link was dropped).
@@ -119,8 +127,10 @@ pub struct SharedEstimates {
     captured: Mutex<Option<SolvedState>>,
     /// A shard's pure estimates so far.
     recorded: Mutex<Vec<SharedEstimate>>,
-    /// Estimates a merge took from `known`.
+    /// Estimates taken from `known`.
     hits: AtomicU64,
+    /// Estimates looked up in `known` and not found (computed here).
+    misses: AtomicU64,
 }
 
 impl SharedEstimates {
@@ -182,6 +192,12 @@ impl SharedEstimates {
         self.hits.load(Ordering::Relaxed)
     }
 
+    /// Estimates looked up in the parts and not found there (near links about to be split, which
+    /// cost no rays, are not looked up).
+    pub fn misses(&self) -> u64 {
+        self.misses.load(Ordering::Relaxed)
+    }
+
     /// Estimates the parts hold.
     pub fn known_len(&self) -> usize {
         self.known.len()
@@ -195,18 +211,25 @@ impl SharedEstimates {
         recorded
     }
 
-    /// Groups the receivers of the built tree (`nodes` before any refinement, root `root`) and gives
-    /// each group to a shard. A group is the subtree of the topmost node holding at most
-    /// ⌈T / (`GROUPS_PER_SHARD`·N)⌉ of the T input triangles; the nodes above are shared. Groups go
-    /// to shards largest first, each to the shard with the least so far (longest processing time
-    /// first), weighed by the power they can reflect (area × largest reflectance channel, plus a
-    /// thousandth of the mean so black groups spread too). Only a shard needs this.
-    pub fn assign_receivers(&self, nodes: &Nodes, root: usize) {
+    /// Groups the receivers of the tree (`nodes` as the build made them, or with the subdivisions of
+    /// the state the shard starts from; root `root`) and gives each group to a shard. A group is the
+    /// subtree of the topmost cluster holding at most ⌈T / (`GROUPS_PER_SHARD`·N)⌉ of the T input
+    /// triangles (or an input triangle); the nodes above are shared. Groups go to shards heaviest
+    /// first, each to the shard with the least so far (longest processing time first), plus a
+    /// thousandth of the mean weight each so that weightless groups spread too. The weight is the
+    /// refinement work a group is expected to bring: from a solved state (`links` of the pass before,
+    /// not empty), the links its receivers hold, since a pass re-refines the links of the one before;
+    /// from the emission, the power it can reflect (area × largest reflectance channel). Only a shard
+    /// needs this, and every shard of a round computes the same assignment.
+    pub fn assign_receivers(&self, nodes: &Nodes, root: usize, links: &Links) {
         let Some((_, count)) = self.shard else { return };
         let n = nodes.len();
+        // Children have higher indices than their parent: one reverse sweep sums subtrees.
         let mut inputs = vec![0usize; n];
+        let mut held = vec![0usize; n];
         for i in (0..n).rev() {
             inputs[i] = if nodes.is_cluster[i] { nodes.children(i).map(|c| inputs[c]).sum() } else { 1 };
+            held[i] = links.range(i).len() + nodes.children(i).map(|c| held[c]).sum::<usize>();
         }
         let limit = inputs[root].div_ceil(GROUPS_PER_SHARD * count as usize).max(1);
         let mut owners = vec![SHARED; n];
@@ -219,7 +242,11 @@ impl SharedEstimates {
                 stack.extend(nodes.children(at));
             }
         }
-        let weight = |g: usize| nodes.area[g] as f64 * nodes.reflectance_max[g] as f64;
+        let by_links = !links.is_empty();
+        let weight = |g: usize| match by_links {
+            true => held[g] as f64,
+            false => nodes.area[g] as f64 * nodes.reflectance_max[g] as f64,
+        };
         let floor = groups.iter().map(|&g| weight(g)).sum::<f64>() / groups.len().max(1) as f64 * 1e-3;
         groups.sort_by(|&a, &b| weight(b).total_cmp(&weight(a)).then(a.cmp(&b)));
         let mut load = vec![0.0f64; count as usize];
@@ -249,8 +276,10 @@ impl SharedEstimates {
         owners[at] == SHARED || owners[at] == index
     }
 
-    /// In its pass, a shard records the pure estimates among `links` (receiver, source, spread cap)
-    /// with their `values`; `paths` are the nodes' tree paths (`tree_path::extend_paths`).
+    /// In its pass, a shard records the estimates among `links` (receiver, source, spread cap) with
+    /// their `values` under their `estimate_key`, except near links left to be split (NaN), whose
+    /// value depends on the pass's exitance; `paths` are the nodes' tree paths
+    /// (`tree_path::extend_paths`).
     pub fn record(
         &self,
         nodes: &Nodes,
@@ -263,29 +292,39 @@ impl SharedEstimates {
         }
         let new: Vec<SharedEstimate> = links
             .zip(values)
-            .filter_map(|((r, s, cap), &value)| pure_key(nodes, paths, r as usize, s as usize, cap).map(|k| (k, value)))
+            .filter(|(_, value)| !value.is_some_and(|(f, _)| f.is_nan()))
+            .filter_map(|((r, s, cap), &value)| {
+                estimate_key(nodes, paths, r as usize, s as usize, cap).map(|k| (k, value))
+            })
             .collect();
         self.recorded.lock().unwrap_or_else(|e| e.into_inner()).extend(new);
     }
 }
 
-/// The key of link (receiver ← source) with spread cap `spread_cap` if its estimate is pure (not a
-/// near link, both ends' paths exact); `paths` holds every node's `tree_path`.
-pub fn pure_key(
+/// The key of the estimate of link (receiver ← source) with spread cap `spread_cap` (see
+/// `EstimateKey`), when both ends' paths are exact; `paths` holds every node's `tree_path`.
+pub fn estimate_key(
     nodes: &Nodes,
     paths: &[Option<TreePath>],
     receiver: usize,
     source: usize,
     spread_cap: f32,
 ) -> Option<EstimateKey> {
-    if is_near(nodes, receiver, source) {
-        return None;
-    }
-    Some(EstimateKey { receiver: paths[receiver]?, source: paths[source]?, spread_cap_bits: spread_cap.to_bits() })
+    let (receiver_path, source_path) = (paths[receiver]?, paths[source]?);
+    let [receiver_leaves, source_leaves] =
+        if is_near(nodes, receiver, source) { near_leaf_shapes(nodes, receiver, source) } else { [0, 0] };
+    Some(EstimateKey {
+        receiver: receiver_path,
+        source: source_path,
+        spread_cap_bits: spread_cap.to_bits(),
+        receiver_leaves,
+        source_leaves,
+    })
 }
 
-/// `links::estimate` of link (receiver ← source), taken from a merge's parts when they hold it
-/// (`paths`: every node's `tree_path`, or empty without `shared`).
+/// `links::estimate` of link (receiver ← source), taken from the parts when they hold its key
+/// (`paths`: every node's `tree_path`, or empty without `shared`). A near link about to be split is
+/// computed (no rays; its value depends on the pass).
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_shared(
     shared: Option<&SharedEstimates>,
@@ -298,9 +337,15 @@ pub fn estimate_shared(
     threshold_w: f64,
 ) -> Option<(f32, f32)> {
     if let Some(shared) = shared.filter(|s| !s.known.is_empty()) {
-        if let Some(value) = pure_key(nodes, paths, receiver, source, spread_cap).and_then(|k| shared.known.get(&k)) {
-            shared.hits.fetch_add(1, Ordering::Relaxed);
-            return *value;
+        let pending = is_near(nodes, receiver, source)
+            && near_split_pending(nodes, receiver, source, spread_cap, threshold_w).is_some();
+        let known = || estimate_key(nodes, paths, receiver, source, spread_cap).and_then(|k| shared.known.get(&k));
+        if !pending {
+            if let Some(value) = known() {
+                shared.hits.fetch_add(1, Ordering::Relaxed);
+                return *value;
+            }
+            shared.misses.fetch_add(1, Ordering::Relaxed);
         }
     }
     estimate(nodes, ctx, receiver, source, spread_cap, threshold_w)
@@ -310,6 +355,68 @@ pub fn estimate_shared(
 mod tests {
     use super::*;
     use crate::radiosity::hierarchy::{clusters, procedural};
+
+    /// One refinement pass sharded two ways, then merged: the merge's bytes are the single solve's, and
+    /// it takes nearly every estimate from the parts, near links (integrated over the leaves below
+    /// their ends) included.
+    #[test]
+    fn a_merge_takes_near_link_estimates_from_the_shards_and_keeps_the_bytes() {
+        use crate::radiosity::hierarchy::estimates::{EstimateHooks, EstimateLog};
+        use crate::radiosity::hierarchy::{solve_logged, HierarchyParams};
+        let scene = procedural::room_with_objects(600);
+        let params = HierarchyParams { refinement_passes: 1, ..HierarchyParams::preview() };
+        let run = |shared: Option<&SharedEstimates>| {
+            let mut log = EstimateLog::default();
+            let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {}, shared };
+            let (solution, _) =
+                solve_logged(&scene, Default::default(), &params, None, &mut hooks, &mut |_| {}).unwrap();
+            (solution, log.computed as u64)
+        };
+        let (single, single_estimates) = run(None);
+        let mut parts = Vec::new();
+        for k in 0..2 {
+            let shard = SharedEstimates::for_shard(k, 2, 1, Vec::new(), None);
+            run(Some(&shard));
+            parts.extend(shard.take_recorded());
+        }
+        let near = parts.iter().filter(|(k, _)| k.receiver_leaves != 0).count();
+        assert!(near > 0, "the shards record near links integrated leaf pair by leaf pair");
+        let merge = SharedEstimates::for_merge(parts, None);
+        let (merged, computed) = run(Some(&merge));
+        let bits = |s: &crate::radiosity::hierarchy::HierarchicalSolution| {
+            s.leaf_exitance.iter().flat_map(|b| b.to_array().map(f32::to_bits)).collect::<Vec<u32>>()
+        };
+        assert_eq!(bits(&merged), bits(&single), "merged exitance is the single solve's, bit for bit");
+        assert_eq!(computed, single_estimates, "the merge asks for the single solve's estimates");
+        assert!(merge.misses() * 100 <= merge.hits(), "misses {} of {}", merge.misses(), merge.hits());
+    }
+
+    /// From a solved state the groups are weighed by the links their receivers hold: with all the links
+    /// on the input triangles of one half of the tree, each shard still gets its share of them.
+    #[test]
+    fn groups_are_balanced_by_the_links_of_the_pass_before() {
+        use crate::radiosity::hierarchy::links::LinkRecord;
+        let (nodes, root, _, _) = clusters::build(&procedural::room_with_objects(2000)).unwrap();
+        let elements: Vec<usize> = (0..nodes.len()).filter(|&n| !nodes.is_cluster[n]).collect();
+        let records: Vec<LinkRecord> = elements[..elements.len() / 2]
+            .iter()
+            .map(|&e| LinkRecord { receiver: e as u32, source: root, form_factor: 0.1, spread: 0.1 })
+            .collect();
+        let links = Links::from_records(nodes.len(), records);
+        for count in 2..4u32 {
+            let mut held = vec![0usize; count as usize];
+            for k in 0..count {
+                let shard = SharedEstimates::for_shard(k, count, 1, Vec::new(), None);
+                shard.assign_receivers(&nodes, root as usize, &links);
+                shard.begin_pass(1);
+                held[k as usize] =
+                    (0..nodes.len()).filter(|&n| shard.refines_receiver(&nodes, n)).map(|n| links.range(n).len()).sum();
+            }
+            let mean = links.len() as f64 / count as f64;
+            // Longest processing time first over ≥ 16 groups a shard: within a group's weight of the mean.
+            assert!(held.iter().all(|&h| (h as f64 - mean).abs() < 0.1 * mean), "{count} shards hold {held:?} links");
+        }
+    }
 
     /// Every receiver is refined by exactly one shard of N, or by all of them (the shared clusters
     /// above the groups, a small share of the tree); and a merge refines every receiver.
@@ -321,7 +428,7 @@ mod tests {
             let shards: Vec<SharedEstimates> =
                 (0..count).map(|k| SharedEstimates::for_shard(k, count, 1, Vec::new(), None)).collect();
             shards.iter().for_each(|s| {
-                s.assign_receivers(&nodes, root as usize);
+                s.assign_receivers(&nodes, root as usize, &Links::default());
                 s.begin_pass(1);
             });
             let mut shared = 0;

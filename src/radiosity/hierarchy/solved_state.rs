@@ -117,31 +117,45 @@ impl SolvedState {
         let n = self.exitance.len();
         let mut out =
             Vec::with_capacity(64 + self.subdivided.len() * 4 + self.links.len() * LINK_BYTES + n * NODE_BYTES);
-        out.extend_from_slice(&self.pass.to_le_bytes());
-        out.extend_from_slice(&self.refinement_rounds.to_le_bytes());
-        out.extend_from_slice(&self.sweeps.to_le_bytes());
-        out.push(self.converged as u8);
-        out.push(self.budget_exceeded as u8);
-        out.extend_from_slice(&self.links_estimated.to_le_bytes());
-        out.extend_from_slice(&self.peak_bytes.to_le_bytes());
-        out.extend_from_slice(&(self.error_after_pass_w.len() as u32).to_le_bytes());
-        self.error_after_pass_w.iter().for_each(|e| out.extend_from_slice(&e.to_bits().to_le_bytes()));
-        out.extend_from_slice(&self.build_nodes.to_le_bytes());
-        out.extend_from_slice(&(self.subdivided.len() as u64).to_le_bytes());
-        self.subdivided.iter().for_each(|s| out.extend_from_slice(&s.to_le_bytes()));
-        out.extend_from_slice(&(self.links.len() as u64).to_le_bytes());
-        for l in &self.links {
-            for word in [l.receiver, l.source, l.form_factor.to_bits(), l.spread.to_bits()] {
-                out.extend_from_slice(&word.to_le_bytes());
-            }
-        }
-        for i in 0..n {
-            let (b, g) = (self.exitance[i], self.gathered[i]);
-            for v in [b.x, b.y, b.z, g.x, g.y, g.z, self.exitance_mean[i]] {
-                out.extend_from_slice(&v.to_bits().to_le_bytes());
-            }
-        }
+        self.write_to(&mut out).unwrap_or_else(|_| unreachable!("writing to a Vec does not fail"));
         out
+    }
+
+    /// Streams the encoding of the module header to `out` (a file being written, or a hash: the
+    /// encoding is never held whole), a link or node at a time.
+    pub fn write_to(&self, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        out.write_all(&self.pass.to_le_bytes())?;
+        out.write_all(&self.refinement_rounds.to_le_bytes())?;
+        out.write_all(&self.sweeps.to_le_bytes())?;
+        out.write_all(&[self.converged as u8, self.budget_exceeded as u8])?;
+        out.write_all(&self.links_estimated.to_le_bytes())?;
+        out.write_all(&self.peak_bytes.to_le_bytes())?;
+        out.write_all(&(self.error_after_pass_w.len() as u32).to_le_bytes())?;
+        for e in &self.error_after_pass_w {
+            out.write_all(&e.to_bits().to_le_bytes())?;
+        }
+        out.write_all(&self.build_nodes.to_le_bytes())?;
+        out.write_all(&(self.subdivided.len() as u64).to_le_bytes())?;
+        for s in &self.subdivided {
+            out.write_all(&s.to_le_bytes())?;
+        }
+        out.write_all(&(self.links.len() as u64).to_le_bytes())?;
+        let mut link = [0u8; LINK_BYTES];
+        for l in &self.links {
+            for (k, word) in [l.receiver, l.source, l.form_factor.to_bits(), l.spread.to_bits()].iter().enumerate() {
+                link[4 * k..4 * k + 4].copy_from_slice(&word.to_le_bytes());
+            }
+            out.write_all(&link)?;
+        }
+        let mut node = [0u8; NODE_BYTES];
+        for i in 0..self.exitance.len() {
+            let (b, g) = (self.exitance[i], self.gathered[i]);
+            for (k, v) in [b.x, b.y, b.z, g.x, g.y, g.z, self.exitance_mean[i]].iter().enumerate() {
+                node[8 * k..8 * k + 8].copy_from_slice(&v.to_bits().to_le_bytes());
+            }
+            out.write_all(&node)?;
+        }
+        Ok(())
     }
 
     /// Reads what `encode` wrote from `r`, to its end. Counts beyond the bytes left are refused

@@ -20,8 +20,9 @@ use crate::radiosity::fingerprint::Fnv1a64;
 use crate::radiosity::specular::SpecularStats;
 
 const MAGIC: &[u8; 8] = b"RADRAYRW";
-/// The version this build writes and reads.
-pub const VERSION: u32 = 1;
+/// The version this build writes and reads (2: hierarchy shard parts carry near links' leaf shapes,
+/// so a part written by an older radray is refused by version instead of as damaged).
+pub const VERSION: u32 = 2;
 
 /// What a row-block file is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -139,6 +139,35 @@ pub fn estimate(strata: Strata, radiance: &[Vec3], distance: &[f32], normal: Vec
     }
 }
 
+/// The relative standard error of a stratified estimate Ĥ = π/(MN) Σ L_jk (one jittered sample per cell)
+/// from its own cells, on luminance y = (L_r + L_g + L_b)/3:
+///
+/// σ(Ĥ)/Ĥ ≈ √(Σ_jk (y_jk − y_j,k+1)²/2) / Σ_jk y_jk,
+///
+/// since Var Ĥ = (π/MN)² Σ σ_jk² and each cell's variance σ_jk² is estimated by half the squared
+/// difference to its neighbour in φ (an over-estimate by the field's own variation between the two
+/// cells, small for a smooth field, and the point where a bright region's edge crosses the cells).
+/// 0 where nothing is seen.
+pub fn relative_error(strata: Strata, radiance: &[Vec3]) -> f32 {
+    let (m, n) = (strata.rings as usize, strata.sectors as usize);
+    assert!(radiance.len() == m * n, "one radiance per cell");
+    let y = |c: usize| radiance[c].element_sum() / 3.0;
+    let mut sum = 0.0f32;
+    let mut squared_differences = 0.0f32;
+    for j in 0..m {
+        for k in 0..n {
+            let (a, b) = (y(j * n + k), y(j * n + (k + 1) % n));
+            sum += a;
+            squared_differences += (a - b) * (a - b);
+        }
+    }
+    if sum > 0.0 {
+        (squared_differences / 2.0).sqrt() / sum
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -173,6 +202,19 @@ mod tests {
         assert!((e.irradiance.x - 2.0 * PI).abs() < 1e-4);
         assert!((e.harmonic_distance - 3.0).abs() < 1e-4);
         assert!(e.rotation_gradient[0].length() < 1e-4 && e.translation_gradient[0].length() < 1e-4);
+    }
+
+    #[test]
+    fn relative_error_is_zero_for_a_uniform_sky_and_sees_one_bright_cell() {
+        let strata = Strata::for_rays(64);
+        let cells = strata.cells();
+        assert_eq!(relative_error(strata, &vec![Vec3::splat(3.0); cells]), 0.0);
+        // One cell at 1 + b among ones: its two φ-neighbour differences b give √(2b²/2)/(cells + b).
+        let b = 19.0;
+        let mut l = vec![Vec3::ONE; cells];
+        l[7] = Vec3::splat(1.0 + b);
+        let expected = b / (cells as f32 + b);
+        assert!((relative_error(strata, &l) - expected).abs() < 1e-6);
     }
 
     /// For L(ω) = 1 + ω_x the rotation gradient is exact: E(n') = π + ∫ω_x cos θ' dω' changes by

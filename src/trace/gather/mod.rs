@@ -3,7 +3,7 @@
 //! solution, so the elements' errors matter one bounce away, smoothed by the integral. An irradiance
 //! cache with gradients (Ward, Rubinstein and Clear 1988; Ward and Heckbert 1992) makes it cheap.
 //! `hemisphere` holds the cells and gradient kernels, `rays` what one gather ray reads, `near` the
-//! second bounce where a ray lands close by, `cache` the records and their interpolation, `prepass`
+//! second bounce where a ray lands close by, `refine` which records gather more rays, `cache` the records and their interpolation, `prepass`
 //! the deterministic filling before the image.
 
 pub mod cache;
@@ -11,11 +11,13 @@ pub mod hemisphere;
 pub mod near;
 pub mod prepass;
 pub mod rays;
+pub mod refine;
 
 pub use cache::{IrradianceCache, IrradianceRecord};
 pub use hemisphere::{HemisphereEstimate, Strata};
 pub use near::NearBounce;
 pub use prepass::{fill, PrepassStats, LEVELS};
+pub use refine::GatherRefinement;
 
 use glam::Vec3;
 
@@ -47,6 +49,7 @@ pub fn for_image(
         image.height_px,
         pixel_angle_rad,
         strata,
+        GatherRefinement::new(params.gather_rays, params.gather_refine_error).as_ref(),
         params.cache_accuracy,
         image.seed,
         on_level_done,

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use super::cache::IrradianceCache;
 use super::hemisphere::Strata;
+use super::refine::GatherRefinement;
 use crate::film::Sampler;
 use crate::trace::camera::PinholeCamera;
 use crate::trace::whitted::{RayCounts, Tracer};
@@ -43,6 +44,8 @@ struct Candidate {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PrepassStats {
     pub records: usize,
+    /// Records gathered with `GatherRefinement::refined` strata.
+    pub refined: usize,
     /// Diffuse points the camera's rays found, on all levels.
     pub candidates: usize,
     /// Camera and gather rays the prepass traced.
@@ -50,7 +53,8 @@ pub struct PrepassStats {
 }
 
 /// The cache for one image of `width_px` × `height_px` through `camera` (a pixel subtends
-/// `pixel_angle_rad`), gathering `strata` at accuracy a = `accuracy`, random numbers from `seed`.
+/// `pixel_angle_rad`), gathering `strata` (or `refinement`'s where its pilot asks) at accuracy
+/// a = `accuracy`, random numbers from `seed`.
 /// `on_level_done(records)` is called after each of the [`LEVELS`] levels with the records so far.
 #[allow(clippy::too_many_arguments)]
 pub fn fill(
@@ -60,6 +64,7 @@ pub fn fill(
     height_px: u32,
     pixel_angle_rad: f32,
     strata: Strata,
+    refinement: Option<&GatherRefinement>,
     accuracy: f32,
     seed: u64,
     on_level_done: &(dyn Fn(usize) + Sync),
@@ -87,11 +92,13 @@ pub fn fill(
             .map(|(i, p)| {
                 let mut sampler = Sampler::independent(seed, PREPASS_STREAM + ((level as u64) << 32) + i as u64);
                 let mut c = RayCounts::default();
-                let estimate = tracer.gather(p.position, p.normal, strata, &mut sampler, &mut c);
-                (estimate, c)
+                let (estimate, refined) =
+                    tracer.record_gather(p.position, p.normal, strata, refinement, &mut sampler, &mut c);
+                (estimate, refined, c)
             })
             .collect();
-        for (p, (estimate, c)) in uncovered.iter().zip(gathered) {
+        for (p, (estimate, refined, c)) in uncovered.iter().zip(gathered) {
+            stats.refined += refined as usize;
             let footprint = p.path_length * pixel_angle_rad;
             cache.insert(
                 p.position,

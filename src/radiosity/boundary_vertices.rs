@@ -1,0 +1,146 @@
+//! Vertex values on the boundary of a surface, extrapolated from the elements inside instead of
+//! averaged: Gouraud's area-weighted vertex mean is the value half an element in from the boundary, so
+//! wherever the solution runs to a surface's edge with a slope (the ceiling beside a wall lamp, whose
+//! direct light falls to zero at the wall) the boundary row of the image is too bright or too dark by
+//! half an element's change. The extrapolation is exact for a linear solution (Cohen and Wallace,
+//! *Radiosity and Realistic Image Synthesis*, 1993, §9.2: nodal values at boundaries by extrapolation).
+
+use glam::{DMat3, DVec3, Vec3};
+
+use crate::mesh::{Mesh, NONE};
+
+/// Per vertex: it lies on the boundary of its surface side. An element edge is a boundary edge when no
+/// other element of the mesh uses it. Edges are first cut at their split midpoints (`midpoint(a, b)`,
+/// recursively; `|_, _| None` on a mesh without T-vertices), so that an unsplit element's edge and its
+/// split neighbour's two half edges count as one shared edge.
+pub fn boundary_vertices(mesh: &Mesh, midpoint: &dyn Fn(u32, u32) -> Option<u32>) -> Vec<bool> {
+    let mut uses: rustc_hash::FxHashMap<(u32, u32), u32> = Default::default();
+    let mut stack = Vec::new();
+    for e in 0..mesh.elements.len() {
+        let c = mesh.elements.corners[e];
+        let n = mesh.elements.corner_count(e);
+        for k in 0..n {
+            stack.push((c[k], c[(k + 1) % n]));
+            while let Some((a, b)) = stack.pop() {
+                match midpoint(a, b) {
+                    Some(m) => {
+                        stack.push((a, m));
+                        stack.push((m, b));
+                    }
+                    None => *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1,
+                }
+            }
+        }
+    }
+    let mut boundary = vec![false; mesh.positions.len()];
+    for ((a, b), count) in uses {
+        if count == 1 {
+            boundary[a as usize] = true;
+            boundary[b as usize] = true;
+        }
+    }
+    boundary
+}
+
+/// For each element, the elements of the same mesh surface that share a vertex with it (itself
+/// excluded), in increasing order.
+fn vertex_neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
+    let mut at_vertex = vec![Vec::new(); mesh.positions.len()];
+    for (e, corners) in mesh.elements.corners.iter().enumerate() {
+        for &v in corners.iter().filter(|&&v| v != NONE) {
+            at_vertex[v as usize].push(e as u32);
+        }
+    }
+    (0..mesh.elements.len())
+        .map(|e| {
+            let surface = mesh.elements.surface[e];
+            let mut around: Vec<u32> = mesh.elements.corners[e]
+                .iter()
+                .filter(|&&v| v != NONE)
+                .flat_map(|&v| at_vertex[v as usize].iter().copied())
+                .filter(|&n| n as usize != e && mesh.elements.surface[n as usize] == surface)
+                .collect();
+            around.sort_unstable();
+            around.dedup();
+            around
+        })
+        .collect()
+}
+
+/// The linear reconstruction of element e's neighbourhood: the in-plane gradient g (one per channel,
+/// as the columns of a matrix) minimising Σₙ (Bₙ − Bₑ − g·(cₙ − cₑ))² over the neighbours n (centres
+/// cₙ), with no component along the normal; and the range [lo, hi] of B over e and its neighbours.
+/// `None` when the neighbours do not span the plane (fewer than two directions).
+fn linear_fit(mesh: &Mesh, values: &[Vec3], e: usize, around: &[u32]) -> Option<(DMat3, DVec3, DVec3)> {
+    let centre = mesh.elements.centre[e].as_dvec3();
+    let normal = mesh.elements.normal[e].as_dvec3();
+    let own = values[e].as_dvec3();
+    let (mut m, mut r) = (DMat3::ZERO, DMat3::ZERO);
+    let (mut lo, mut hi) = (own, own);
+    for &n in around {
+        let d = mesh.elements.centre[n as usize].as_dvec3() - centre;
+        let d = d - normal * d.dot(normal);
+        let b = values[n as usize].as_dvec3();
+        lo = lo.min(b);
+        hi = hi.max(b);
+        m += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+        let db = b - own;
+        r += DMat3::from_cols(d * db.x, d * db.y, d * db.z);
+    }
+    // The normal direction carries no data: pin it with the trace, so that M is invertible exactly
+    // when the neighbours span the plane.
+    let trace = m.x_axis.x + m.y_axis.y + m.z_axis.z;
+    let m = m + DMat3::from_cols(normal * normal.x, normal * normal.y, normal * normal.z) * trace;
+    let det = m.determinant();
+    if !(det > 1e-9 * trace * trace * trace) {
+        return None;
+    }
+    Some((m.inverse() * r, lo, hi))
+}
+
+/// Replaces the value of every boundary vertex (`boundary`) by the area-weighted mean, over its
+/// elements e that are not buried, of e's linear extrapolation
+///   B_v = Bₑ + gₑ·(p_v − cₑ),  limited to [lo − (hi − lo)/2, hi + (hi − lo)/2] and to B ≥ 0,
+/// with gₑ, lo and hi from `linear_fit`. The limit allows exactly the half-element overshoot of a
+/// linear solution beyond its neighbours' range and stops a shadow boundary's step from being
+/// extrapolated into a spike. Elements whose neighbours do not span their plane give their own value.
+/// Interior vertices keep their value.
+pub fn extrapolate(mesh: &Mesh, element_values: &[Vec3], boundary: &[bool], vertex_values: &mut [Vec3]) {
+    assert_eq!(element_values.len(), mesh.elements.len());
+    assert_eq!(vertex_values.len(), mesh.positions.len());
+    if !boundary.iter().any(|&b| b) {
+        return;
+    }
+    let neighbours = vertex_neighbours(mesh);
+    let mut sum = vec![DVec3::ZERO; mesh.positions.len()];
+    let mut weight = vec![0.0f64; mesh.positions.len()];
+    for e in 0..mesh.elements.len() {
+        if mesh.element_buried.get(e).copied().unwrap_or(false) {
+            continue;
+        }
+        let corners = mesh.elements.corners[e];
+        if !corners.iter().any(|&v| v != NONE && boundary[v as usize]) {
+            continue;
+        }
+        let fit = linear_fit(mesh, element_values, e, &neighbours[e]);
+        let own = element_values[e].as_dvec3();
+        let area = mesh.elements.area[e] as f64;
+        for &v in corners.iter().filter(|&&v| v != NONE && boundary[v as usize]) {
+            let value = match fit {
+                Some((gradient, lo, hi)) => {
+                    let d = mesh.positions[v as usize].as_dvec3() - mesh.elements.centre[e].as_dvec3();
+                    let spread = (hi - lo) * 0.5;
+                    (own + gradient.transpose() * d).clamp(lo - spread, hi + spread).max(DVec3::ZERO)
+                }
+                None => own,
+            };
+            sum[v as usize] += value * area;
+            weight[v as usize] += area;
+        }
+    }
+    for v in 0..vertex_values.len() {
+        if boundary[v] && weight[v] > 0.0 {
+            vertex_values[v] = (sum[v] / weight[v]).as_vec3();
+        }
+    }
+}

@@ -1,0 +1,87 @@
+//! Adaptive rays per irradiance-cache record: a small pilot gather estimates how noisy the record's
+//! own gather would be, and records whose hemisphere holds small bright regions (a patch of direct
+//! light, the view through a door: a few cells 10–20× the rest) gather `REFINE_FACTOR` times the rays.
+//! The pilot is thrown away, so the kept gather is independent of the decision and stays unbiased.
+
+use glam::Vec3;
+
+use super::hemisphere::{frame, relative_error, HemisphereEstimate, Strata};
+use crate::film::Sampler;
+use crate::trace::whitted::{RayCounts, Tracer};
+
+/// Rays of the pilot gather (an 5 × 13 stratification).
+pub const PILOT_RAYS: u32 = 64;
+/// A refined record gathers this many times `gather_rays`.
+pub const REFINE_FACTOR: u32 = 4;
+
+/// When a record's gather gets more rays (`[render] gather_refine_error`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GatherRefinement {
+    pub pilot: Strata,
+    /// The strata of a refined record (about `REFINE_FACTOR` × `gather_rays` cells).
+    pub refined: Strata,
+    /// The largest predicted relative standard error of a `gather_rays` gather kept at the base count.
+    pub error_bound: f32,
+}
+
+impl GatherRefinement {
+    /// The refinement of gathers of `gather_rays` rays at `error_bound`; `None` (no pilot, every record
+    /// at the base count) where the bound is 0.
+    pub fn new(gather_rays: u32, error_bound: f32) -> Option<GatherRefinement> {
+        (error_bound > 0.0).then(|| GatherRefinement {
+            pilot: Strata::for_rays(PILOT_RAYS),
+            refined: Strata::for_rays(REFINE_FACTOR * gather_rays),
+            error_bound,
+        })
+    }
+
+    /// The relative standard error predicted for a gather over `base` from the pilot's own,
+    /// σ_base/H ≈ σ_pilot/H · √(cells_pilot / cells_base): the 1/√N of Monte Carlo, which
+    /// over-predicts a stratified gather's (whose edge cells fall as N^−3/4), so it errs towards
+    /// refining.
+    pub fn predicted_error(&self, pilot_error: f32, base: Strata) -> f32 {
+        pilot_error * (self.pilot.cells() as f32 / base.cells() as f32).sqrt()
+    }
+}
+
+impl Tracer<'_> {
+    /// The relative standard error of a pilot gather over `strata` at (p, n) (`hemisphere::relative_error`),
+    /// its rays reading the interpolated solution (no second bounce at near hits).
+    pub fn pilot_error(&self, p: Vec3, n: Vec3, strata: Strata, sampler: &mut Sampler, counts: &mut RayCounts) -> f32 {
+        let (t, b) = frame(n);
+        let origin = p + n * self.ray_offset();
+        let mut radiance = Vec::with_capacity(strata.cells());
+        for j in 0..strata.rings {
+            for k in 0..strata.sectors {
+                let local = strata.direction(j, k, sampler.next_1d(), sampler.next_1d());
+                let dir = (t * local.x + b * local.y + n * local.z).normalize();
+                radiance.push(self.gather_radiance(origin, dir, None, sampler, counts).0);
+            }
+        }
+        relative_error(strata, &radiance)
+    }
+
+    /// A record's gather at (p, n): over `base`, or, where `refinement`'s pilot predicts a relative error
+    /// above its bound, over its `refined` strata; and whether it was refined. Unbiased either way: the
+    /// pilot's random numbers are drawn before, and apart from, the kept gather's, and each stratified
+    /// gather is unbiased at any M × N.
+    pub fn record_gather(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        base: Strata,
+        refinement: Option<&GatherRefinement>,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> (HemisphereEstimate, bool) {
+        let refine = refinement.is_some_and(|r| {
+            let pilot = self.pilot_error(p, n, r.pilot, sampler, counts);
+            r.predicted_error(pilot, base) > r.error_bound
+        });
+        let strata = match refinement {
+            Some(r) if refine => r.refined,
+            _ => base,
+        };
+        (self.gather(p, n, strata, sampler, counts), refine)
+    }
+}
