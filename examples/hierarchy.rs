@@ -1,5 +1,6 @@
 //! Runs the hierarchical radiosity solver on a scene file or a procedural room and prints its
-//! statistics: `cargo run --release --example hierarchy -- SCENE.toml|procedural:TRIANGLES [EPSILON]`.
+//! statistics: `cargo run --release --example hierarchy -- SCENE.toml|procedural:TRIANGLES [EPSILON]
+//! [MEMORY_MB] [VISIBILITY_RAYS] [MIN_ELEMENT_DIVISOR]` (unset or `-`: `HierarchyParams::default()`'s).
 
 use std::process::ExitCode;
 
@@ -8,7 +9,10 @@ use radray::radiosity::hierarchy::{self, procedural, HierarchyParams, HierarchyP
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
     let Some(what) = args.get(1) else {
-        eprintln!("usage: hierarchy SCENE.toml|procedural:TRIANGLES [EPSILON] [MEMORY_MB]");
+        eprintln!(
+            "usage: hierarchy SCENE.toml|procedural:TRIANGLES [EPSILON] [MEMORY_MB] [VISIBILITY_RAYS] \
+             [MIN_ELEMENT_DIVISOR] (- keeps the default)"
+        );
         return ExitCode::FAILURE;
     };
     let scene = if let Some(count) = what.strip_prefix("procedural:") {
@@ -29,7 +33,9 @@ fn main() -> ExitCode {
         }
     };
     let mut params = HierarchyParams::default();
-    if let Some(eps) = args.get(2) {
+    // Positional overrides; "-" or a missing argument keeps the default.
+    let arg = |k: usize| args.get(k).filter(|a| a.as_str() != "-");
+    if let Some(eps) = arg(2) {
         match eps.parse() {
             Ok(e) => params.error_threshold = e,
             Err(e) => {
@@ -38,11 +44,29 @@ fn main() -> ExitCode {
             }
         }
     }
-    if let Some(mb) = args.get(3) {
+    if let Some(mb) = arg(3) {
         match mb.parse::<usize>() {
             Ok(m) => params.memory_bytes = m << 20,
             Err(e) => {
                 eprintln!("{mb}: {e}");
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    if let Some(rays) = arg(4) {
+        match rays.parse() {
+            Ok(r) => params.visibility_rays = r,
+            Err(e) => {
+                eprintln!("{rays}: {e}");
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    if let Some(divisor) = arg(5) {
+        match divisor.parse() {
+            Ok(d) => params.min_element_divisor = d,
+            Err(e) => {
+                eprintln!("{divisor}: {e}");
                 return ExitCode::FAILURE;
             }
         }

@@ -16,6 +16,10 @@ use crate::accel::Accel;
 /// (64 points): fine enough to find a block's footprint on a floor triangle 6× its area.
 pub const MAX_PROBE_LEVELS: u32 = 3;
 
+/// A leaf a contact line crosses (too small to split) measures its open share with the centroids of
+/// its 4^k midpoint sub-triangles, k at least this (16 points).
+pub const LEAF_PROBE_LEVELS: u32 = 2;
+
 /// cos 60°: the four side rays of `enclosed` lean this far from the normal.
 const SIDE_RAY_COS: f32 = 0.5;
 
@@ -115,17 +119,26 @@ fn probe_levels(area: f32, min_area: f32) -> u32 {
 /// that only clips an element's corner can pass between its probes, so such an element may stay one
 /// level above the minimum size, all open or all enclosed.
 pub fn plan(probe: &ContactProbe, corners: &[Vec3; 3], n: Vec3, min_area: f32) -> ContactPlan {
+    plan_piece(probe, corners, n, min_area, false)
+}
+
+/// `plan` for an element, or (`split_piece`) for a quarter of an element the contact line crosses:
+/// such a quarter too small to split again takes its open share from at least 4^`LEAF_PROBE_LEVELS`
+/// probes, not from the one or four its size gives, so a leaf half under the object is neither
+/// counted all open nor all hidden.
+fn plan_piece(probe: &ContactProbe, corners: &[Vec3; 3], n: Vec3, min_area: f32, split_piece: bool) -> ContactPlan {
     let area = 0.5 * (corners[1] - corners[0]).cross(corners[2] - corners[0]).length();
-    let (open, all) = probe.open_probes(corners, n, probe_levels(area, min_area));
+    let splittable = area * 0.25 >= min_area;
+    let levels = if split_piece && !splittable {
+        probe_levels(area, min_area).max(LEAF_PROBE_LEVELS)
+    } else {
+        probe_levels(area, min_area)
+    };
+    let (open, all) = probe.open_probes(corners, n, levels);
     let straddles = open > 0 && open < all;
-    if straddles && area * 0.25 >= min_area {
+    if straddles && splittable {
         let q = quarters(corners);
-        return ContactPlan::Split(Box::new([
-            plan(probe, &q[0], n, min_area),
-            plan(probe, &q[1], n, min_area),
-            plan(probe, &q[2], n, min_area),
-            plan(probe, &q[3], n, min_area),
-        ]));
+        return ContactPlan::Split(Box::new(q.map(|c| plan_piece(probe, &c, n, min_area, true))));
     }
     ContactPlan::Leaf { open_share: open as f32 / all.max(1) as f32 }
 }
@@ -306,6 +319,25 @@ mod tests {
         let footprint = 0.4f32 * 0.4 / 2.0; // the triangle covers half of the box's base
         let open = nodes.open_area[e as usize];
         assert!((open - (0.5 - footprint)).abs() < 0.01, "{open}");
+    }
+
+    #[test]
+    fn a_minimum_size_leaf_on_the_contact_line_gets_a_fractional_open_share() {
+        // With one probe per minimum-size leaf every leaf on the box's base line would be all open
+        // or all hidden; with 4^LEAF_PROBE_LEVELS probes the leaves the line cuts through are partly open.
+        let t = tracing_of(&open_bottom_box());
+        let accel = Accel::build(&t.positions, &t.triangles);
+        let p = probe(&accel, &t);
+        let mut nodes = Nodes::default();
+        let floor = [vec3(0.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0), vec3(1.0, 0.0, 1.0)];
+        let e = nodes.push_element(floor, 0, 0, Vec3::splat(0.5), Vec3::ZERO);
+        let min_area = 0.5 / 4f32.powi(5);
+        split_at_contacts(&mut nodes, &[e], &p, min_area, usize::MAX);
+        let partly_open = (0..nodes.len())
+            .filter(|&n| nodes.is_leaf(n) && nodes.area[n] < 4.0 * min_area)
+            .filter(|&n| nodes.open_area[n] > 0.0 && nodes.open_area[n] < nodes.area[n])
+            .count();
+        assert!(partly_open > 0, "no minimum-size leaf has a fractional open share");
     }
 
     #[test]
