@@ -33,43 +33,9 @@ fn main() -> ExitCode {
         }
     };
     let mut params = HierarchyParams::default();
-    // Positional overrides; "-" or a missing argument keeps the default.
-    let arg = |k: usize| args.get(k).filter(|a| a.as_str() != "-");
-    if let Some(eps) = arg(2) {
-        match eps.parse() {
-            Ok(e) => params.error_threshold = e,
-            Err(e) => {
-                eprintln!("{eps}: {e}");
-                return ExitCode::FAILURE;
-            }
-        }
-    }
-    if let Some(mb) = arg(3) {
-        match mb.parse::<usize>() {
-            Ok(m) => params.memory_bytes = m << 20,
-            Err(e) => {
-                eprintln!("{mb}: {e}");
-                return ExitCode::FAILURE;
-            }
-        }
-    }
-    if let Some(rays) = arg(4) {
-        match rays.parse() {
-            Ok(r) => params.visibility_rays = r,
-            Err(e) => {
-                eprintln!("{rays}: {e}");
-                return ExitCode::FAILURE;
-            }
-        }
-    }
-    if let Some(divisor) = arg(5) {
-        match divisor.parse() {
-            Ok(d) => params.min_element_divisor = d,
-            Err(e) => {
-                eprintln!("{divisor}: {e}");
-                return ExitCode::FAILURE;
-            }
-        }
+    if let Err(e) = apply_overrides(&args, &mut params) {
+        eprintln!("{e}");
+        return ExitCode::FAILURE;
     }
     let start = std::time::Instant::now();
     let result = hierarchy::solve(&scene, &params, &mut |p| match p {
@@ -100,5 +66,34 @@ fn main() -> ExitCode {
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// The positional overrides EPSILON, MEMORY_MB, VISIBILITY_RAYS and MIN_ELEMENT_DIVISOR (arguments
+/// 2 to 5); "-" or a missing argument keeps the default.
+fn apply_overrides(args: &[String], params: &mut HierarchyParams) -> Result<(), String> {
+    if let Some(e) = positional(args, 2)? {
+        params.error_threshold = e;
+    }
+    if let Some(mb) = positional::<usize>(args, 3)? {
+        params.memory_bytes = mb << 20;
+    }
+    if let Some(r) = positional(args, 4)? {
+        params.visibility_rays = r;
+    }
+    if let Some(d) = positional(args, 5)? {
+        params.min_element_divisor = d;
+    }
+    Ok(())
+}
+
+/// Argument `k` parsed, `None` when missing or "-".
+fn positional<T: std::str::FromStr>(args: &[String], k: usize) -> Result<Option<T>, String>
+where
+    T::Err: std::fmt::Display,
+{
+    match args.get(k).filter(|a| a.as_str() != "-") {
+        None => Ok(None),
+        Some(a) => a.parse().map(Some).map_err(|e| format!("{a}: {e}")),
     }
 }
