@@ -283,8 +283,9 @@ mod tests {
         assert!(!p.enclosed(vec3(0.5, 0.0, 0.5), Vec3::Y));
     }
 
-    #[test]
-    fn a_floor_element_crossed_by_a_box_base_is_split_to_the_minimum_size_along_it() {
+    /// A floor triangle (half of the unit square) split at the contacts of `open_bottom_box` down to
+    /// 1/4⁵ of its area: the nodes, the floor's node, the minimum area and the stats.
+    fn floor_split_under_open_bottom_box() -> (Nodes, u32, f32, ContactStats) {
         let t = tracing_of(&open_bottom_box());
         let accel = Accel::build(&t.positions, &t.triangles);
         let p = probe(&accel, &t);
@@ -293,6 +294,12 @@ mod tests {
         let e = nodes.push_element(floor, 0, 0, Vec3::splat(0.5), Vec3::ZERO);
         let min_area = 0.5 / 4f32.powi(5);
         let stats = split_at_contacts(&mut nodes, &[e], &p, min_area, usize::MAX);
+        (nodes, e, min_area, stats)
+    }
+
+    #[test]
+    fn a_floor_element_crossed_by_a_box_base_is_split_to_the_minimum_size_along_it() {
+        let (nodes, e, min_area, stats) = floor_split_under_open_bottom_box();
         assert!(stats.split > 0 && stats.hidden_leaves > 0);
         let inside = |c: Vec3| c.x > 0.3 && c.x < 0.7 && c.z > 0.3 && c.z < 0.7;
         let mut crossing = 0;
@@ -325,14 +332,7 @@ mod tests {
     fn a_minimum_size_leaf_on_the_contact_line_gets_a_fractional_open_share() {
         // With one probe per minimum-size leaf every leaf on the box's base line would be all open
         // or all hidden; with 4^LEAF_PROBE_LEVELS probes the leaves the line cuts through are partly open.
-        let t = tracing_of(&open_bottom_box());
-        let accel = Accel::build(&t.positions, &t.triangles);
-        let p = probe(&accel, &t);
-        let mut nodes = Nodes::default();
-        let floor = [vec3(0.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0), vec3(1.0, 0.0, 1.0)];
-        let e = nodes.push_element(floor, 0, 0, Vec3::splat(0.5), Vec3::ZERO);
-        let min_area = 0.5 / 4f32.powi(5);
-        split_at_contacts(&mut nodes, &[e], &p, min_area, usize::MAX);
+        let (nodes, _, min_area, _) = floor_split_under_open_bottom_box();
         let partly_open = (0..nodes.len())
             .filter(|&n| nodes.is_leaf(n) && nodes.area[n] < 4.0 * min_area)
             .filter(|&n| nodes.open_area[n] > 0.0 && nodes.open_area[n] < nodes.area[n])
