@@ -356,18 +356,17 @@ fn cornell_mesh() -> (SceneDescription, Mesh, System) {
     (scene, mesh, system)
 }
 
+/// The validation cube solved by Gauss-Seidel to 1e-6 (`solver::solve_solution`, uniform mesh).
+fn gauss_seidel_solution(scene: &SceneDescription, mesh: &Mesh, system: &System) -> Solution {
+    let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
+    let boundary = conforming_boundary(mesh);
+    solver::solve_solution(mesh, &scene.materials, &system.ff, &gauss_seidel, &boundary, &mut |_, _| {})
+}
+
 #[test]
 fn direct_part_is_first_bounce() {
     let (scene, mesh, system) = cornell_mesh();
-    let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
-    let solution = solver::solve_solution(
-        &mesh,
-        &scene.materials,
-        &system.ff,
-        &gauss_seidel,
-        &conforming_boundary(&mesh),
-        &mut |_, _| {},
-    );
+    let solution = gauss_seidel_solution(&scene, &mesh, &system);
     // One Jacobi sweep from B = E is E + ρFE: the first bounce plus the emission.
     let one_bounce = RadiosityParams { max_iterations: 1, ..params(SolverKind::Jacobi, 0.0) };
     let (b1, _) = system.solve(&one_bounce);
@@ -428,15 +427,7 @@ fn progressive_ambient_term_makes_partial_solution_closer() {
 
 fn solved_cornell() -> (SceneDescription, Mesh, Solution) {
     let (scene, mesh, system) = cornell_mesh();
-    let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
-    let solution = solver::solve_solution(
-        &mesh,
-        &scene.materials,
-        &system.ff,
-        &gauss_seidel,
-        &conforming_boundary(&mesh),
-        &mut |_, _| {},
-    );
+    let solution = gauss_seidel_solution(&scene, &mesh, &system);
     (scene, mesh, solution)
 }
 

@@ -5,6 +5,8 @@
 //! too thin for a fit falls back to the mean; and the matrix and matrix-free paths both interpolate
 //! through it (the furnace stays exact, an emitter's vertices keep its exitance).
 
+mod common;
+
 use std::path::Path;
 
 use glam::{DVec3, Vec3};
@@ -13,36 +15,17 @@ use radray::mesh::{Mesh, NONE};
 use radray::progress::Progress;
 use radray::radiosity::boundary_vertices::{conforming_boundary, vertex_values};
 use radray::run::{self, RunStats};
-use radray::scene::{self, Camera, ImageSettings, Material, MethodChoice, RadiosityParams, RenderParams};
-use radray::scene::{SceneDescription, SolverKind, SourceLoc, Surface};
+use radray::scene::{self, Material, MethodChoice, SolverKind, Surface};
 use radray::transport::photons::RunPhotons;
 
 /// `vertices` as one surface of material 0.
 fn surface(vertices: Vec<Vec3>, two_sided: bool) -> Surface {
-    Surface {
-        vertices,
-        material: 0,
-        two_sided,
-        shading_normals: None,
-        uvs: None,
-        object: "surface".into(),
-        source: SourceLoc::default(),
-    }
+    common::surface(vertices, 0, two_sided)
 }
 
 /// `surfaces` (material 0, diffuse 0.5) meshed uniformly at `edge`.
 fn mesh_of(surfaces: Vec<Surface>, edge: f32) -> Mesh {
-    let scene = SceneDescription {
-        path: "test".into(),
-        camera: Camera { eye: Vec3::Y, look_at: Vec3::ZERO, up: Vec3::Z, vfov_deg: 40.0 },
-        image: ImageSettings::default(),
-        radiosity: RadiosityParams::default(),
-        render: RenderParams::default(),
-        materials: vec![Material::diffuse("grey", Vec3::splat(0.5))],
-        surfaces,
-        warnings: Vec::new(),
-    };
-    Mesh::build(&scene, edge)
+    Mesh::build(&common::scene(vec![Material::diffuse("grey", Vec3::splat(0.5))], surfaces), edge)
 }
 
 /// The uniform mesh's vertex values of `element` (f64 in, as the solver hands them over).
