@@ -13,7 +13,7 @@ use radray::radiosity::adaptive::criterion::{across_concave_edges, elements_to_s
 use radray::radiosity::adaptive::hanging::{conform, hanging_vertices};
 use radray::radiosity::adaptive::subdivide::{split, EdgeMidpoints};
 use radray::radiosity::adaptive::substructure::{kept_rows, new_indices};
-use radray::radiosity::boundary_vertices::{boundary_vertices, extrapolate};
+use radray::radiosity::boundary_vertices::{boundary_vertices, vertex_values};
 use radray::radiosity::hierarchy::form_factor::point_to_polygon;
 use radray::radiosity::matrix::FormFactors;
 use radray::run::{self, RunStats};
@@ -183,13 +183,11 @@ fn the_refined_solution_is_the_same_at_any_thread_count() {
     assert_eq!(solution_1.vertex_exitance, solution_2.vertex_exitance);
 }
 
-/// Extrapolated boundary values of `element` on `mesh` (no T-vertices), interior vertices averaged.
+/// Extrapolated boundary values of `element` on `mesh` (no T-vertices), interior vertices averaged:
+/// the shared vertex step (`vertex_values`).
 fn extrapolated(mesh: &Mesh, element: &[Vec3]) -> Vec<Vec3> {
-    let average = mesh.vertex_average(&element.iter().map(|v| v.as_dvec3()).collect::<Vec<_>>());
-    let mut vertex: Vec<Vec3> = average.iter().map(|v| v.as_vec3()).collect();
-    let boundary = boundary_vertices(mesh, &|_, _| None);
-    extrapolate(mesh, element, &boundary, &mut vertex);
-    vertex
+    let wide: Vec<_> = element.iter().map(|v| v.as_dvec3()).collect();
+    vertex_values(mesh, &wide, &boundary_vertices(mesh, &|_, _| None))
 }
 
 /// On a 10 × 10 grid with a linear solution B = 1 + 2x + 0.5z (all positive), every vertex value,

@@ -10,6 +10,7 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 use radray::mesh::Mesh;
+use radray::radiosity::boundary_vertices::conforming_boundary;
 use radray::radiosity::fingerprint::fingerprint;
 use radray::radiosity::solution_file::{
     SolutionFileError, FILE_MAGIC, FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_REFINED_MESH,
@@ -355,11 +356,17 @@ fn cornell_mesh() -> (SceneDescription, Mesh, System) {
     (scene, mesh, system)
 }
 
+/// The validation cube solved by Gauss-Seidel to 1e-6 (`solver::solve_solution`, uniform mesh).
+fn gauss_seidel_solution(scene: &SceneDescription, mesh: &Mesh, system: &System) -> Solution {
+    let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
+    let boundary = conforming_boundary(mesh);
+    solver::solve_solution(mesh, &scene.materials, &system.ff, &gauss_seidel, &boundary, &mut |_, _| {})
+}
+
 #[test]
 fn direct_part_is_first_bounce() {
     let (scene, mesh, system) = cornell_mesh();
-    let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
-    let solution = solver::solve_solution(&mesh, &scene.materials, &system.ff, &gauss_seidel, &mut |_, _| {});
+    let solution = gauss_seidel_solution(&scene, &mesh, &system);
     // One Jacobi sweep from B = E is E + ρFE: the first bounce plus the emission.
     let one_bounce = RadiosityParams { max_iterations: 1, ..params(SolverKind::Jacobi, 0.0) };
     let (b1, _) = system.solve(&one_bounce);
@@ -420,8 +427,7 @@ fn progressive_ambient_term_makes_partial_solution_closer() {
 
 fn solved_cornell() -> (SceneDescription, Mesh, Solution) {
     let (scene, mesh, system) = cornell_mesh();
-    let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
-    let solution = solver::solve_solution(&mesh, &scene.materials, &system.ff, &gauss_seidel, &mut |_, _| {});
+    let solution = gauss_seidel_solution(&scene, &mesh, &system);
     (scene, mesh, solution)
 }
 
@@ -542,8 +548,14 @@ fn scene_without_emitter_solves_to_black() {
     assert_eq!(black.mesh_fingerprint, fingerprint(&dark, &scene.materials));
     assert!(black.stats.converged);
     for solver in ALL_SOLVERS {
-        let computed =
-            solver::solve_solution(&dark, &scene.materials, &system.ff, &params(solver, 1e-6), &mut |_, _| {});
+        let computed = solver::solve_solution(
+            &dark,
+            &scene.materials,
+            &system.ff,
+            &params(solver, 1e-6),
+            &conforming_boundary(&dark),
+            &mut |_, _| {},
+        );
         assert!(computed.stats.converged, "{solver:?}");
         assert_eq!(computed.element_exitance, black.element_exitance);
         assert_eq!(computed.vertex_exitance, black.vertex_exitance);

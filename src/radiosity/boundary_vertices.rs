@@ -4,6 +4,7 @@
 //! direct light falls to zero at the wall) the boundary row of the image is too bright or too dark by
 //! half an element's change. The extrapolation is exact for a linear solution (Cohen and Wallace,
 //! *Radiosity and Realistic Image Synthesis*, 1993, §9.2: nodal values at boundaries by extrapolation).
+//! `vertex_values` is the one vertex-interpolation step of the element meshes (uniform and adaptive).
 
 use glam::{DMat3, DVec3, Vec3};
 
@@ -42,9 +43,29 @@ pub fn boundary_vertices(mesh: &Mesh, midpoint: &dyn Fn(u32, u32) -> Option<u32>
     boundary
 }
 
-/// For each element, the elements of the same mesh surface that share a vertex with it (itself
-/// excluded), in increasing order.
+/// The boundary vertices of a mesh without T-vertices (the uniform mesh: one shared-vertex grid per
+/// surface side, `Mesh::build`): `boundary_vertices` with no split edges.
+pub fn conforming_boundary(mesh: &Mesh) -> Vec<bool> {
+    boundary_vertices(mesh, &|_, _| None)
+}
+
+/// Per-vertex values of per-element values B_e, as pass two interpolates them: the area-weighted
+/// mean over the unburied elements around a vertex (`Mesh::vertex_average`, Gouraud) inside each
+/// surface side, and the clamped linear extrapolation of `extrapolate` at the vertices marked
+/// `boundary`. Every pass-one method on element meshes (matrix, matrix-free, adaptive) makes its
+/// vertex values here.
+pub fn vertex_values(mesh: &Mesh, element_values: &[DVec3], boundary: &[bool]) -> Vec<Vec3> {
+    let mut vertex: Vec<Vec3> = mesh.vertex_average(element_values).iter().map(|v| v.as_vec3()).collect();
+    let element: Vec<Vec3> = element_values.iter().map(|v| v.as_vec3()).collect();
+    extrapolate(mesh, &element, boundary, &mut vertex);
+    vertex
+}
+
+/// For each element, the elements of the same mesh surface that share a vertex with it (itself and
+/// buried elements excluded: they are never seen and their values are not the surface's light), in
+/// increasing order.
 fn vertex_neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
+    let buried = |e: usize| mesh.element_buried.get(e).copied().unwrap_or(false);
     let mut at_vertex = vec![Vec::new(); mesh.positions.len()];
     for (e, corners) in mesh.elements.corners.iter().enumerate() {
         for &v in corners.iter().filter(|&&v| v != NONE) {
@@ -58,7 +79,7 @@ fn vertex_neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
                 .iter()
                 .filter(|&&v| v != NONE)
                 .flat_map(|&v| at_vertex[v as usize].iter().copied())
-                .filter(|&n| n as usize != e && mesh.elements.surface[n as usize] == surface)
+                .filter(|&n| n as usize != e && mesh.elements.surface[n as usize] == surface && !buried(n as usize))
                 .collect();
             around.sort_unstable();
             around.dedup();

@@ -6,6 +6,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::boundary_vertices::conforming_boundary;
 use super::fingerprint;
 use super::fingerprint::form_factor_key;
 use super::hierarchical::Hierarchical;
@@ -470,7 +471,9 @@ impl FullMatrix {
             stage.set_position(iteration as u64);
             stage.set_message(format!("residual {residual:.2e}"));
         };
-        let solution = solver::solve_solution_until(mesh, &scene.materials, ff, &params, &mut on_iteration, stop)?;
+        let boundary = conforming_boundary(mesh);
+        let solution =
+            solver::solve_solution_until(mesh, &scene.materials, ff, &params, &boundary, &mut on_iteration, stop)?;
         stats.solve_seconds = start.elapsed().as_secs_f64();
         stats.solver = Some(self.name());
         stats.sweeps = solution.stats.iterations;
@@ -650,6 +653,7 @@ impl PassOneMethod for MatrixFree {
             &scene.materials,
             &solved.exitance,
             &solved.direct_exitance,
+            &conforming_boundary(&mesh),
             solved.stats,
         );
         Ok(PassOne { mesh, solution, stats, reused_form_factors: false })

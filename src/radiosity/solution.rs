@@ -6,6 +6,7 @@ use std::sync::Arc;
 use glam::{DVec3, Vec3};
 
 use super::adaptive::refinement::Refinement;
+use super::boundary_vertices::vertex_values;
 use super::fingerprint::fingerprint;
 use super::leaf_mesh::LeafGeometry;
 use crate::mesh::Mesh;
@@ -21,9 +22,10 @@ pub struct Solution {
     /// The first-bounce part of B_i: light received straight from emitters and reflected,
     /// ρ_i Σ_j F_ij E_j (emission itself excluded).
     pub element_direct_exitance: Vec<Vec3>,
-    /// Area-weighted vertex averages of `element_exitance` (Gouraud interpolation).
+    /// Vertex values of `element_exitance` (Gouraud interpolation): area-weighted vertex means, linearly
+    /// extrapolated at surface boundaries (`boundary_vertices::vertex_values`).
     pub vertex_exitance: Vec<Vec3>,
-    /// Area-weighted vertex averages of `element_direct_exitance`.
+    /// Vertex values of `element_direct_exitance`, made alike.
     pub vertex_direct_exitance: Vec<Vec3>,
     /// Identifies the mesh and materials the solution belongs to: see `fingerprint`.
     pub mesh_fingerprint: u64,
@@ -53,20 +55,23 @@ impl Solution {
     }
 
     /// A solution from per-element exitance and its direct part (however they were solved): adds the
-    /// vertex averages and the fingerprint of `mesh` and `materials`.
+    /// vertex values (`boundary_vertices::vertex_values`, extrapolated at the vertices marked
+    /// `boundary`: `boundary_vertices::conforming_boundary` on the uniform mesh) and the fingerprint of
+    /// `mesh` and `materials`.
     pub fn from_element_values(
         mesh: &Mesh,
         materials: &[Material],
         exitance: &[DVec3],
         direct: &[DVec3],
+        boundary: &[bool],
         stats: SolveStats,
     ) -> Solution {
         assert!(exitance.len() == mesh.elements.len() && direct.len() == mesh.elements.len());
         Solution {
             element_exitance: to_f32(exitance),
             element_direct_exitance: to_f32(direct),
-            vertex_exitance: to_f32(&mesh.vertex_average(exitance)),
-            vertex_direct_exitance: to_f32(&mesh.vertex_average(direct)),
+            vertex_exitance: vertex_values(mesh, exitance, boundary),
+            vertex_direct_exitance: vertex_values(mesh, direct, boundary),
             mesh_fingerprint: fingerprint(mesh, materials),
             stats,
             leaf_geometry: None,

@@ -7,6 +7,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use crate::mesh::Mesh;
+use crate::radiosity::boundary_vertices::{conforming_boundary, vertex_values};
 use crate::radiosity::Solution;
 use crate::scene::DirectMode;
 use crate::transport::SurfaceHit;
@@ -48,7 +49,9 @@ pub struct Diffuse<'a> {
 /// `Mesh::vertex_average`), with Hₑ = (Bₑ − Eₑ)/ρₑ the irradiance element e reflected in pass one
 /// (0 where ρₑ = 0), and the same for the direct part Hₑ,d = Bₑ,d/ρₑ. On a textured surface the
 /// elements' mean albedos differ, so interpolating B and dividing by one element's ρ̄ₑ would carry the
-/// neighbours' albedo into it; irradiance is smooth across them.
+/// neighbours' albedo into it; irradiance is smooth across them. On the uniform mesh the boundary
+/// vertices are extrapolated as the solution's exitance is (`boundary_vertices::vertex_values`); the
+/// adaptive and hierarchical meshes (T-vertices this step cannot see) keep the plain means.
 pub fn vertex_irradiance(mesh: &Mesh, solution: &Solution) -> (Vec<Vec3>, Vec<Vec3>) {
     let e = &mesh.elements;
     let per_albedo = |value: Vec3, rho: Vec3| {
@@ -60,8 +63,9 @@ pub fn vertex_irradiance(mesh: &Mesh, solution: &Solution) -> (Vec<Vec3>, Vec<Ve
         .collect();
     let direct: Vec<glam::DVec3> =
         (0..e.len()).map(|i| per_albedo(solution.element_direct_exitance[i], e.reflectance[i]).as_dvec3()).collect();
-    let to_f32 = |v: Vec<glam::DVec3>| v.into_iter().map(|x| x.as_vec3()).collect();
-    (to_f32(mesh.vertex_average(&total)), to_f32(mesh.vertex_average(&direct)))
+    let uniform = solution.refinement.is_none() && solution.leaf_geometry.is_none();
+    let boundary = if uniform { conforming_boundary(mesh) } else { vec![false; mesh.positions.len()] };
+    (vertex_values(mesh, &total, &boundary), vertex_values(mesh, &direct, &boundary))
 }
 
 impl<'a> Diffuse<'a> {

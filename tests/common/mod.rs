@@ -12,6 +12,7 @@ use glam::{vec3, DVec3, Vec3};
 use radray::accel::Accel;
 use radray::mesh::Mesh;
 use radray::progress::Progress;
+use radray::radiosity::boundary_vertices::{conforming_boundary, vertex_values};
 use radray::radiosity::solution::{Solution, SolveStats};
 use radray::run::{self, RunStats};
 use radray::scene::{
@@ -128,12 +129,13 @@ pub fn cornell() -> SceneDescription {
     SceneDescription { camera: cornell_camera(), ..scene(cornell_materials(), surfaces) }
 }
 
-/// A hand-made solution: per-element exitance and its direct part, vertex values by the mesh's
-/// area-weighted averaging (in f64, as the solver does).
+/// A hand-made solution: per-element exitance and its direct part, vertex values as the solver makes
+/// them on the uniform mesh (`boundary_vertices::vertex_values`, in f64).
 pub fn solution(mesh: &Mesh, exitance: Vec<Vec3>, direct: Vec<Vec3>) -> Solution {
+    let boundary = conforming_boundary(mesh);
     let average = |values: &[Vec3]| -> Vec<Vec3> {
         let wide: Vec<DVec3> = values.iter().map(|v| v.as_dvec3()).collect();
-        mesh.vertex_average(&wide).iter().map(|v| v.as_vec3()).collect()
+        vertex_values(mesh, &wide, &boundary)
     };
     Solution {
         vertex_exitance: average(&exitance),

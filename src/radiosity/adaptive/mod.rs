@@ -125,18 +125,15 @@ impl Adaptive {
         stats.specular_pixels = rows.specular.pixels;
         stats.specular_rays = rows.specular.rays;
         stats.extended_nonzeros = rows.specular.entries;
+        // Boundary vertices extrapolated from the elements inside (`boundary_vertices`, with the split
+        // edges' midpoints so that a T-junction is not a boundary), then the hanging ones given their
+        // edge's value.
+        let boundary = super::boundary_vertices::boundary_vertices(&mesh, &|a, b| midpoints.get(a, b));
         let start = Instant::now();
-        let mut solution = solver::solve_solution(&mesh, &scene.materials, &ff, &params, &mut |_, _| {});
+        let mut solution = solver::solve_solution(&mesh, &scene.materials, &ff, &params, &boundary, &mut |_, _| {});
         stats.solve_seconds += start.elapsed().as_secs_f64();
         stats.sweeps += solution.stats.iterations;
         stats.final_residual = solution.stats.residual_history.last().copied().unwrap_or(0.0);
-        // Boundary vertices extrapolated from the elements inside (`boundary_vertices`), then the
-        // hanging ones given their edge's value.
-        let boundary = super::boundary_vertices::boundary_vertices(&mesh, &|a, b| midpoints.get(a, b));
-        let s = &mut solution;
-        super::boundary_vertices::extrapolate(&mesh, &s.element_exitance, &boundary, &mut s.vertex_exitance);
-        let direct = &s.element_direct_exitance;
-        super::boundary_vertices::extrapolate(&mesh, direct, &boundary, &mut s.vertex_direct_exitance);
         let hanging = hanging::hanging_vertices(&mesh, midpoints);
         hanging::conform(&mut solution.vertex_exitance, &hanging);
         hanging::conform(&mut solution.vertex_direct_exitance, &hanging);
