@@ -1,5 +1,6 @@
 //! Runs the hierarchical radiosity solver on a scene file or a procedural room and prints its
-//! statistics: `cargo run --release --example hierarchy -- SCENE.toml|procedural:TRIANGLES [EPSILON]`.
+//! statistics: `cargo run --release --example hierarchy -- SCENE.toml|procedural:TRIANGLES [EPSILON]
+//! [MEMORY_MB] [VISIBILITY_RAYS] [MIN_ELEMENT_DIVISOR]` (unset or `-`: `HierarchyParams::default()`'s).
 
 use std::process::ExitCode;
 
@@ -8,7 +9,10 @@ use radray::radiosity::hierarchy::{self, procedural, HierarchyParams, HierarchyP
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
     let Some(what) = args.get(1) else {
-        eprintln!("usage: hierarchy SCENE.toml|procedural:TRIANGLES [EPSILON] [MEMORY_MB]");
+        eprintln!(
+            "usage: hierarchy SCENE.toml|procedural:TRIANGLES [EPSILON] [MEMORY_MB] [VISIBILITY_RAYS] \
+             [MIN_ELEMENT_DIVISOR] (- keeps the default)"
+        );
         return ExitCode::FAILURE;
     };
     let scene = if let Some(count) = what.strip_prefix("procedural:") {
@@ -29,23 +33,9 @@ fn main() -> ExitCode {
         }
     };
     let mut params = HierarchyParams::default();
-    if let Some(eps) = args.get(2) {
-        match eps.parse() {
-            Ok(e) => params.error_threshold = e,
-            Err(e) => {
-                eprintln!("{eps}: {e}");
-                return ExitCode::FAILURE;
-            }
-        }
-    }
-    if let Some(mb) = args.get(3) {
-        match mb.parse::<usize>() {
-            Ok(m) => params.memory_bytes = m << 20,
-            Err(e) => {
-                eprintln!("{mb}: {e}");
-                return ExitCode::FAILURE;
-            }
-        }
+    if let Err(e) = apply_overrides(&args, &mut params) {
+        eprintln!("{e}");
+        return ExitCode::FAILURE;
     }
     let start = std::time::Instant::now();
     let result = hierarchy::solve(&scene, &params, &mut |p| match p {
@@ -76,5 +66,34 @@ fn main() -> ExitCode {
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// The positional overrides EPSILON, MEMORY_MB, VISIBILITY_RAYS and MIN_ELEMENT_DIVISOR (arguments
+/// 2 to 5); "-" or a missing argument keeps the default.
+fn apply_overrides(args: &[String], params: &mut HierarchyParams) -> Result<(), String> {
+    if let Some(e) = positional(args, 2)? {
+        params.error_threshold = e;
+    }
+    if let Some(mb) = positional::<usize>(args, 3)? {
+        params.memory_bytes = mb << 20;
+    }
+    if let Some(r) = positional(args, 4)? {
+        params.visibility_rays = r;
+    }
+    if let Some(d) = positional(args, 5)? {
+        params.min_element_divisor = d;
+    }
+    Ok(())
+}
+
+/// Argument `k` parsed, `None` when missing or "-".
+fn positional<T: std::str::FromStr>(args: &[String], k: usize) -> Result<Option<T>, String>
+where
+    T::Err: std::fmt::Display,
+{
+    match args.get(k).filter(|a| a.as_str() != "-") {
+        None => Ok(None),
+        Some(a) => a.parse().map(Some).map_err(|e| format!("{a}: {e}")),
     }
 }

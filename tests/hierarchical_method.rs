@@ -76,6 +76,34 @@ fn scene_keys_choose_and_tune_the_hierarchy() {
     assert_eq!(bytes.radiosity.hierarchy.memory_bytes, 123_456_789);
 }
 
+/// Without `min_element_size`, the presets take the minimum element edge from the scene's shortest
+/// input edge (`hierarchy::scene_min_element_divisor`): diagonal / 80 for the Cornell box, whose
+/// shortest edge (the lamp's, 105 mm) is 0.11 of its diagonal, diagonal / 200 for a room with
+/// furniture, and 8 elements per shortest edge in between.
+#[test]
+fn unset_min_element_size_follows_the_shortest_input_edge() {
+    use radray::radiosity::hierarchy::scene_min_element_divisor;
+    assert_eq!(hierarchy_params(&load("cornell_box.toml")).min_element_divisor, 80.0);
+    assert_eq!(hierarchy_params(&load("rooms/l_room.toml")).min_element_divisor, 200.0);
+    assert!((scene_min_element_divisor(100.0, 5.0) - 160.0).abs() < 1e-3);
+    assert_eq!(scene_min_element_divisor(100.0, 0.0), 200.0);
+    assert_eq!(scene_min_element_divisor(100.0, 50.0), 80.0);
+}
+
+/// Without `visibility_rays`, a scene of fewer than 10,000 input triangles gets twice its preset's
+/// rays (`hierarchy::scene_visibility_rays`); a larger one keeps them.
+#[test]
+fn unset_visibility_rays_double_for_scenes_of_few_triangles() {
+    use radray::radiosity::hierarchy::{scene_visibility_rays, HierarchyParams};
+    assert_eq!(
+        hierarchy_params(&load("cornell_box.toml")).visibility_rays,
+        2 * HierarchyParams::default().visibility_rays
+    );
+    assert_eq!(scene_visibility_rays(8, 9_999), 16);
+    assert_eq!(scene_visibility_rays(8, 10_000), 8);
+    assert_eq!(scene_visibility_rays(4, 263_000), 4);
+}
+
 #[test]
 fn bad_hierarchy_keys_are_refused_with_file_and_line() {
     let dir = tempfile::tempdir().unwrap();

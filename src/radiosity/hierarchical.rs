@@ -41,7 +41,9 @@ pub const DIRECT_SAMPLES: u32 = 16;
 
 /// The hierarchy's parameters from the scene: the preset's (`HierarchyParams::preview()`, `default()`
 /// or `final_quality()` for `quality`), then the `[radiosity]` keys: ε, minimum element size (as the
-/// diagonal's divisor), visibility rays, passes, the scene's tolerance and seed, and three quarters of
+/// diagonal's divisor; unset, `hierarchy::scene_min_element_divisor` of the scene's shortest input
+/// edge, at most the preset's), visibility rays (unset, `hierarchy::scene_visibility_rays`: twice the
+/// preset's below 10,000 input triangles), passes, the scene's tolerance and seed, and three quarters of
 /// `memory` for nodes and links (the rest is the scene, the ray accelerators and the output mesh).
 pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
     let h = &scene.radiosity.hierarchy;
@@ -53,18 +55,32 @@ pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
     let diagonal = scene.diagonal();
     let min_element_divisor = match h.min_element_size {
         Some(size) if size > 0.0 && diagonal > 0.0 => (diagonal / size).max(1.0),
-        _ => defaults.min_element_divisor,
+        _ => {
+            hierarchy::scene_min_element_divisor(diagonal, shortest_input_edge(scene)).min(defaults.min_element_divisor)
+        }
     };
     HierarchyParams {
         error_threshold: h.error_threshold.unwrap_or(defaults.error_threshold),
         min_element_divisor,
-        visibility_rays: h.visibility_rays.unwrap_or(defaults.visibility_rays),
+        visibility_rays: h.visibility_rays.unwrap_or_else(|| {
+            hierarchy::scene_visibility_rays(defaults.visibility_rays, hierarchy::count_input_triangles(scene))
+        }),
         refinement_passes: h.refinement_passes.unwrap_or(defaults.refinement_passes),
         tolerance: scene.radiosity.tolerance,
         memory_bytes: usize::try_from(h.memory_bytes / 4 * 3).unwrap_or(usize::MAX),
         seed: scene.radiosity.seed,
         ..defaults
     }
+}
+
+/// The shortest edge of any input polygon (its outline, not a quad's diagonal; infinite without
+/// surfaces).
+pub fn shortest_input_edge(scene: &SceneDescription) -> f32 {
+    scene
+        .surfaces
+        .iter()
+        .flat_map(|s| s.vertices.iter().zip(s.vertices.iter().cycle().skip(1)).map(|(a, b)| a.distance(*b)))
+        .fold(f32::INFINITY, f32::min)
 }
 
 /// Bytes the hierarchy needs before any refinement (the input triangles, their clusters and the

@@ -29,6 +29,8 @@ pub struct InputTriangles {
 pub struct TracingTriangles {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
+    /// Per triangle: its surface is two-sided (its back is a front too; `contact` needs this).
+    pub two_sided: Vec<bool>,
 }
 
 /// The built tree: nodes (root = the index), input triangles and tracing triangles.
@@ -95,6 +97,7 @@ pub fn build_textured(scene: &SceneDescription, texels: &SurfaceTexels) -> Resul
             let base = tracing.positions.len() as u32;
             tracing.positions.extend_from_slice(&tri);
             tracing.triangles.push([base, base + 1, base + 2]);
+            tracing.two_sided.push(scene.surfaces[s as usize].two_sided);
         }
         corners_of.push(tri);
         meta.push((s, false, material));

@@ -109,22 +109,29 @@ pub fn leaf_exitance(emission: DVec3, reflectance: DVec3, irradiance: DVec3, old
 }
 
 /// Push-pull over the tree below `root` (one Jacobi step of the hierarchical system): pushes
-/// `own_irradiance` down (a node's total is its own plus its ancestors', each element taking its own
-/// normal's share of the oriented part, see `Irradiance::on_element`), sets each leaf to E + ρ·G_total
-/// and pulls area-weighted means up:
+/// `own_irradiance` down (a node's total is its own, as it lands on its open part (`on_open_part`),
+/// plus its ancestors', each element taking its own normal's share of the oriented part, see
+/// `Irradiance::on_element`; a node with no open area gets nothing), sets each leaf to E + ρ·G_total
+/// and pulls open-area-weighted means up (`pulled`):
 ///
-/// B_leaf = E + ρ·Σ_{a ∈ ancestors(leaf) ∪ {leaf}} G_a(n_leaf),  B_inner = Σ_c A_c B_c / Σ_c A_c.
+/// B_leaf = E + ρ·Σ_{a ∈ ancestors(leaf) ∪ {leaf}} (A_a/A_open,a)·G_a(n_leaf),
+/// B_inner = Σ_c A_open,c B_c / Σ_c A_open,c.
 ///
 /// Writes `exitance` for every node below `root` and returns the total irradiance per node as pushed
-/// (the mean over the node, `Irradiance::mean`). Power is conserved: Σ_leaves A·G_total = Σ_nodes
-/// A·mean(G_own), and A_root·B_root = Σ_leaves A·B.
+/// (the mean over the node, `Irradiance::mean`). Power is conserved below elements: Σ_leaves
+/// A_open·G_total = Σ_nodes A·mean(G_own), and A_open,root·B_root = Σ_leaves A_open·B (with nothing
+/// hidden, A_open = A).
 pub fn push_pull(nodes: &Nodes, root: usize, own_irradiance: &[Irradiance], exitance: &mut [DVec3]) -> Vec<DVec3> {
     let mut total = vec![DVec3::ZERO; nodes.len()];
     // Pre-order push with an explicit stack, then a post-order pull over the same order reversed.
     let mut order = Vec::new();
     let mut stack = vec![(root, Irradiance::default())];
     while let Some((n, down)) = stack.pop() {
-        let mut g = down.plus(&own_irradiance[n]);
+        let mut g = if nodes.open_area[n] > 0.0 {
+            down.plus(&on_open_part(nodes, n, own_irradiance[n]))
+        } else {
+            Irradiance::default() // all of it hidden: nothing lands
+        };
         if !nodes.is_cluster[n] {
             g = Irradiance::uniform(g.on_element(nodes.normal[n]));
         }
@@ -144,17 +151,35 @@ pub fn push_pull(nodes: &Nodes, root: usize, own_irradiance: &[Irradiance], exit
     total
 }
 
-/// The area-weighted mean of a node's children's exitance: B = Σ_c A_c B_c / Σ_c A_c.
+/// The mean of a node's children's exitance over their open area (`Nodes::open_area`):
+/// B = Σ_c A_open,c B_c / Σ_c A_open,c, the area-weighted mean when nothing is hidden. The exitance a
+/// source sends over a link is that of its open part: the link's visibility already counts the
+/// hidden part as blocked, and averaging its darkness in as well would count it twice. A node with
+/// no open area takes the plain area-weighted mean.
 pub fn pulled(nodes: &Nodes, node: usize, exitance: &[DVec3]) -> DVec3 {
-    let mut sum = DVec3::ZERO;
-    let mut area = 0.0f64;
+    let (mut open_sum, mut open) = (DVec3::ZERO, 0.0f64);
+    let (mut sum, mut area) = (DVec3::ZERO, 0.0f64);
     for c in nodes.children(node) {
+        open_sum += exitance[c] * nodes.open_area[c] as f64;
+        open += nodes.open_area[c] as f64;
         sum += exitance[c] * nodes.area[c] as f64;
         area += nodes.area[c] as f64;
     }
-    if area > 0.0 {
+    if open > 0.0 {
+        open_sum / open
+    } else if area > 0.0 {
         sum / area
     } else {
         DVec3::ZERO
     }
+}
+
+/// A node's own gathered irradiance as it lands on its open part: ×`Nodes::open_gain` (the power
+/// its links bring, A·G, spread over A_open; nothing on a node with no open area).
+pub fn on_open_part(nodes: &Nodes, node: usize, own: Irradiance) -> Irradiance {
+    let gain = nodes.open_gain(node);
+    if gain == 1.0 {
+        return own;
+    }
+    Irradiance { uniform: own.uniform * gain, oriented: own.oriented.map(|o| o * gain) }
 }

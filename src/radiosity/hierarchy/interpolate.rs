@@ -1,6 +1,7 @@
 //! The leaf elements as a shared-vertex mesh with conforming per-vertex exitance: vertices are shared
 //! within a smoothing group (edge-connected input triangles of one material and side whose normals
-//! differ by less than about 25°); a vertex takes the area-weighted mean of the leaves around it,
+//! differ by less than about 25°); a vertex takes the mean of the leaves around it weighted by their
+//! open area (`Nodes::open_area`, the area-weighted mean when nothing rests on the surface),
 //! except a hanging node (a vertex inside a coarser neighbour's edge), which takes that edge's
 //! interpolated value, so Gouraud shading shows no T-vertex cracks.
 
@@ -100,18 +101,33 @@ pub fn leaf_mesh(nodes: &Nodes, inputs: &InputTriangles, root: usize) -> LeafMes
         mesh.triangles.push(tri);
         mesh.leaf_node.push(n as u32);
     }
-    // Area-weighted means.
+    // Open-area-weighted means (`Nodes::open_area`): a vertex on the edge of an object resting on the
+    // surface takes the open leaves' value, not the dark hidden ones'; a vertex with only hidden
+    // leaves around it takes their area-weighted mean.
     let mut sum = vec![DVec3::ZERO; mesh.positions.len()];
     let mut weight = vec![0.0f64; mesh.positions.len()];
+    let mut hidden_sum = vec![DVec3::ZERO; mesh.positions.len()];
+    let mut hidden_weight = vec![0.0f64; mesh.positions.len()];
     for (t, &n) in mesh.triangles.iter().zip(&mesh.leaf_node) {
-        let a = nodes.area[n as usize] as f64;
+        let (open, a) = (nodes.open_area[n as usize] as f64, nodes.area[n as usize] as f64);
         for &v in t {
-            sum[v as usize] += nodes.exitance[n as usize] * a;
-            weight[v as usize] += a;
+            sum[v as usize] += nodes.exitance[n as usize] * open;
+            weight[v as usize] += open;
+            hidden_sum[v as usize] += nodes.exitance[n as usize] * a;
+            hidden_weight[v as usize] += a;
         }
     }
-    let mut value: Vec<DVec3> =
-        sum.iter().zip(&weight).map(|(s, &w)| if w > 0.0 { *s / w } else { DVec3::ZERO }).collect();
+    let mut value: Vec<DVec3> = (0..sum.len())
+        .map(|v| {
+            if weight[v] > 0.0 {
+                sum[v] / weight[v]
+            } else if hidden_weight[v] > 0.0 {
+                hidden_sum[v] / hidden_weight[v]
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect();
     // Hanging nodes, coarsest edges first so that an edge's ends are final before its midpoint.
     let mut edges: Vec<(f32, u32, u32, u32)> = Vec::new();
     for (t, &n) in mesh.triangles.iter().zip(&mesh.leaf_node) {

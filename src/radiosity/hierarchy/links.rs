@@ -111,16 +111,31 @@ impl Links {
 /// exitance, because a child link's spread is capped by its parent's (receiver split: Σ A_r ρ_r = A_R
 /// ρ_R, ρ being area-averaged) or by its share A_s/A_S of it (source split or self-link expansion: B_S
 /// is the area-weighted mean of the children's B).
+///
+/// A receiver with no open area (`Nodes::open_area`: all of it inside an object resting on it) has
+/// error 0: nothing its links bring lands (`gather::on_open_part`), so it is never refined.
 pub fn link_error_power(nodes: &Nodes, receiver: usize, source: usize, spread: f32) -> f64 {
+    if !(nodes.open_area[receiver] > 0.0) {
+        return 0.0;
+    }
     nodes.area[receiver] as f64 * nodes.reflectance_max[receiver] as f64 * nodes.exitance_mean[source] * spread as f64
 }
 
 /// The part of a link's error that comes from the source's exitance varying over it (W):
 /// A_R · ρ_R · c · max_k |B_k − B_S| over the source's children k (0 for a leaf source), with c the
 /// form factor of a far link or the spread (bound) of a near one. Splitting the source removes it.
+/// Children with no open area send nothing and do not count (their darkness is no variation of what
+/// the source sends); a receiver with no open area has none (see `link_error_power`).
 pub fn source_variation_power(nodes: &Nodes, receiver: usize, source: usize, coefficient: f32) -> f64 {
+    if !(nodes.open_area[receiver] > 0.0) {
+        return 0.0;
+    }
     let b = nodes.exitance_mean[source];
-    let spread = nodes.children(source).map(|c| (nodes.exitance_mean[c] - b).abs()).fold(0.0, f64::max);
+    let spread = nodes
+        .children(source)
+        .filter(|&c| nodes.open_area[c] > 0.0)
+        .map(|c| (nodes.exitance_mean[c] - b).abs())
+        .fold(0.0, f64::max);
     nodes.area[receiver] as f64 * nodes.reflectance_max[receiver] as f64 * coefficient as f64 * spread
 }
 

@@ -18,6 +18,7 @@
 //! The hemicube is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
 
 pub mod clusters;
+pub mod contact;
 pub mod estimates;
 pub mod form_factor;
 pub mod gather;
@@ -42,6 +43,7 @@ use glam::{DVec3, Vec3};
 use crate::accel::Accel;
 use crate::material::SceneTextures;
 use crate::scene::SceneDescription;
+use contact::{split_at_contacts, ContactProbe};
 use estimates::{EstimateHooks, EstimateLog, Stopped};
 use interpolate::LeafMesh;
 use links::{refinement_error, LinkRecord, Links, LINK_BYTES};
@@ -87,9 +89,12 @@ pub struct HierarchyParams {
     /// ρ·B·ΔF ≤ ε·Ē for receivers above A_min, a power criterion below it (see
     /// `refine::RefineSettings::allowed_error_w`), so tiny input triangles do not multiply the links.
     pub error_threshold: f64,
-    /// Elements are not subdivided below an area of (scene diagonal / this)².
+    /// Elements are not subdivided below an area of (scene diagonal / this)². A scene's presets
+    /// choose it with `scene_min_element_divisor` (between `COARSEST_MIN_ELEMENT_DIVISOR` and this
+    /// default, `FINEST_MIN_ELEMENT_DIVISOR`) unless `min_element_size` is given.
     pub min_element_divisor: f32,
-    /// Rays per link for visibility.
+    /// Rays per link for visibility. A scene's presets double it below `FEW_INPUT_TRIANGLES`
+    /// (`scene_visibility_rays`) unless `visibility_rays` is given.
     pub visibility_rays: u32,
     /// Overrelaxation factor ω of the Gauss-Seidel sweeps (1 = plain Gauss-Seidel).
     pub relaxation: f64,
@@ -104,13 +109,67 @@ pub struct HierarchyParams {
     pub seed: u64,
 }
 
+/// Scenes with fewer input triangles than this get twice their preset's visibility rays.
+pub const FEW_INPUT_TRIANGLES: usize = 10_000;
+
+/// The visibility rays per link a preset with `preset_rays` uses for a scene of `input_triangles`:
+/// 2 × `preset_rays` below `FEW_INPUT_TRIANGLES`, else `preset_rays`.
+///
+/// A link's visibility is a fraction of its rays, and its noise shows on a receiver about as
+/// 1/√(links × rays) over the links the receiver gathers. In a scene of a few hundred input
+/// polygons each receiver gathers over few links and every link is cheap next to the whole solve:
+/// there, 16 rays instead of 8 took cornell_original's radiosity-mode relMSE from 0.00167 to 0.00099
+/// (mean of seeds 0–3), alcove_hall's from 0.00432 to 0.00255, gap_room's from 0.050 to 0.037 against
+/// the converged image (docs/performance.md). In a tessellated scene the links number millions, each
+/// receiver gathers over many of them, and the rays are most of the cost (procedural:16000 at 16 rays:
+/// about 1.6× the CPU time at 8), so it keeps the preset's.
+pub fn scene_visibility_rays(preset_rays: u32, input_triangles: usize) -> u32 {
+    if input_triangles < FEW_INPUT_TRIANGLES {
+        preset_rays.saturating_mul(2)
+    } else {
+        preset_rays
+    }
+}
+
+/// The finest minimum element edge a preset uses: diagonal / 200.
+pub const FINEST_MIN_ELEMENT_DIVISOR: f32 = 200.0;
+
+/// The coarsest minimum element edge a preset uses: diagonal / 80.
+pub const COARSEST_MIN_ELEMENT_DIVISOR: f32 = 80.0;
+
+/// Minimum elements per shortest input edge: a preset's minimum element edge is at least this many
+/// times finer than the scene's shortest input polygon edge.
+pub const MIN_ELEMENTS_PER_SHORTEST_EDGE: f32 = 8.0;
+
+/// The minimum element divisor a preset uses for a scene of diagonal `diagonal` whose shortest input
+/// polygon edge is `shortest_edge` (same units):
+///
+/// d = clamp(diagonal / (shortest_edge / 8), 80, 200), minimum element edge = diagonal / d.
+///
+/// The detail light makes on a surface (contact shadows, concave corners, penumbrae) is set by the
+/// geometry around it, so elements need not be much finer than the smallest input feature. A scene
+/// with small polygons anywhere (furniture, pillars, any tessellated mesh) keeps diagonal / 200; a
+/// scene made only of large polygons (a Cornell box: shortest edge 105 mm of a 961 mm diagonal)
+/// gets elements down to diagonal / 80: fewer and larger leaves (cornell_original radiosity mode at
+/// 16 visibility rays: relMSE 0.00111 at diagonal / 80 in 8.6 CPU-s against 0.00108 at diagonal / 200
+/// in 24.9, the full matrix 0.00036 in 11.2; docs/performance.md). A degenerate edge (0) gives
+/// diagonal / 200.
+pub fn scene_min_element_divisor(diagonal: f32, shortest_edge: f32) -> f32 {
+    let divisor = diagonal * MIN_ELEMENTS_PER_SHORTEST_EDGE / shortest_edge;
+    if divisor.is_finite() {
+        divisor.clamp(COARSEST_MIN_ELEMENT_DIVISOR, FINEST_MIN_ELEMENT_DIVISOR)
+    } else {
+        FINEST_MIN_ELEMENT_DIVISOR
+    }
+}
+
 impl Default for HierarchyParams {
     /// Six of the 8 GB the issue allows go to nodes and links; the rest is the scene, the BVH and the
     /// output mesh.
     fn default() -> Self {
         HierarchyParams {
             error_threshold: 5e-3,
-            min_element_divisor: 200.0,
+            min_element_divisor: FINEST_MIN_ELEMENT_DIVISOR,
             visibility_rays: 8,
             relaxation: 1.1,
             tolerance: 1e-4,
@@ -273,6 +332,21 @@ impl LinkStructure {
     pub fn link_count(&self) -> usize {
         self.links.len()
     }
+
+    /// The nodes, with the final exitance of the solve that refined them.
+    pub fn nodes(&self) -> &Nodes {
+        &self.nodes
+    }
+
+    /// The links by receiver.
+    pub fn links(&self) -> &Links {
+        &self.links
+    }
+
+    /// The input triangles (each one's scene surface, side and node).
+    pub fn inputs(&self) -> &clusters::InputTriangles {
+        &self.inputs
+    }
 }
 
 /// Solves the scene's diffuse radiosity hierarchically, with every material's Kd and π·Ke (no
@@ -370,6 +444,17 @@ pub fn solve_logged(
         min_element_area,
         budget_bytes: params.memory_bytes,
     };
+    if reuse.is_none() {
+        // Where an object rests on an element, split it down to the minimum size along the contact
+        // and keep the enclosed part out of what the element sends and shows (`contact`).
+        let probe =
+            ContactProbe { accel: &accel, tracing: &tracing, offset: ctx.offset, contact_distance: diagonal * 1e-4 };
+        let first_piece = nodes.len();
+        // At most half the budget's nodes, so refinement keeps room.
+        let max_nodes = params.memory_bytes / 2 / (NODE_BYTES + std::mem::size_of::<u32>());
+        split_at_contacts(&mut nodes, &inputs.node, &probe, min_element_area, max_nodes);
+        nodes.assign_texture_means(first_piece);
+    }
     let mut stats = HierarchyStats {
         input_triangles: inputs.node.len(),
         clusters: nodes.is_cluster.iter().filter(|&&c| c).count(),

@@ -18,7 +18,7 @@ pub const NODE_BYTES: usize = std::mem::size_of::<bool>()
     + std::mem::size_of::<u8>() * 2
     + std::mem::size_of::<[Vec3; 3]>()
     + 4 * std::mem::size_of::<Vec3>()
-    + 3 * std::mem::size_of::<f32>()
+    + 4 * std::mem::size_of::<f32>()
     + std::mem::size_of::<[f32; 6]>()
     + 2 * std::mem::size_of::<DVec3>()
     + std::mem::size_of::<f64>();
@@ -48,6 +48,11 @@ pub struct Nodes {
     pub emission: Vec<Vec3>,
     /// Surface area (sum over the contents for a cluster).
     pub area: Vec<f32>,
+    /// The part of `area` that is open (m²): not inside a closed object resting on it (`contact`),
+    /// so light can reach it. Equal to `area` unless `contact::split_at_contacts` found otherwise;
+    /// a sum over the children for an inner node. Pulled exitance is weighted by it, and a node's
+    /// gathered power lands on it only.
+    pub open_area: Vec<f32>,
     /// Radius of a sphere about `centre` holding the node.
     pub radius: Vec<f32>,
     /// Largest channel of the reflectance, area-averaged over a cluster's children (the ρ of the
@@ -86,6 +91,31 @@ impl Nodes {
 
     pub fn is_leaf(&self, node: usize) -> bool {
         self.first_child[node] == NONE
+    }
+
+    /// A/A_open: what the irradiance a node's links bring (a mean over all of it, the hidden part
+    /// included, since visibility rays from that part are blocked) is multiplied by on its open part,
+    /// so that the gathered power A·G lands on the open area only; 0 for a node with no open area.
+    pub fn open_gain(&self, node: usize) -> f64 {
+        let open = self.open_area[node];
+        if open > 0.0 {
+            self.area[node] as f64 / open as f64
+        } else {
+            0.0
+        }
+    }
+
+    /// Sets every inner node's `open_area` to the sum over its children (children always come after
+    /// their parent, so one pass in reverse index order suffices).
+    pub fn sum_open_areas(&mut self) {
+        for n in (0..self.len()).rev() {
+            if !self.is_leaf(n) {
+                let all_open = self.children(n).all(|c| self.open_area[c] == self.area[c]);
+                // All open: keep the node's own area bit for bit (a sum of quarters may round).
+                self.open_area[n] =
+                    if all_open { self.area[n] } else { self.children(n).map(|c| self.open_area[c]).sum() };
+            }
+        }
     }
 
     /// Appends an element (input triangle or a piece of one) and returns its index.
@@ -150,6 +180,7 @@ impl Nodes {
         self.reflectance.push(n.reflectance);
         self.emission.push(n.emission);
         self.area.push(n.area);
+        self.open_area.push(n.area);
         self.radius.push(n.radius);
         self.reflectance_max.push(n.reflectance_max);
         self.projected_bins.push(n.projected_bins);
@@ -165,7 +196,7 @@ impl Nodes {
         self.first_child[cluster] = first;
         self.child_count[cluster] = count;
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        let mut area = 0.0f32;
+        let (mut area, mut open_area) = (0.0f32, 0.0f32);
         let (mut rho, mut emission, mut rho_max) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
         let mut bins = [0.0f32; 6];
         let mut exitance = DVec3::ZERO;
@@ -173,6 +204,7 @@ impl Nodes {
             self.parent[c] = cluster as u32;
             let a = self.area[c];
             area += a;
+            open_area += self.open_area[c];
             rho += self.reflectance[c] * a;
             emission += self.emission[c] * a;
             rho_max += self.reflectance_max[c] * a;
@@ -186,6 +218,7 @@ impl Nodes {
         }
         let inv = if area > 0.0 { 1.0 / area } else { 0.0 };
         self.area[cluster] = area;
+        self.open_area[cluster] = open_area;
         self.reflectance[cluster] = rho * inv;
         self.emission[cluster] = emission * inv;
         self.reflectance_max[cluster] = rho_max * inv;
@@ -215,17 +248,18 @@ impl Nodes {
     /// vertices.
     pub fn subdivide(&mut self, node: usize) -> u32 {
         assert!(!self.is_cluster[node] && self.is_leaf(node), "only leaf elements subdivide");
-        let [a, b, c] = self.corners[node];
-        let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
         let (input, level) = (self.input[node], self.level[node].saturating_add(1));
         let (rho, e) = (self.reflectance[node], self.emission[node]);
         let parent_area = self.area[node];
+        let open_quarter = self.open_area[node] * 0.25;
         let exitance = self.exitance[node];
         let first = self.len() as u32;
-        for tri in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
+        for tri in quarters(&self.corners[node]) {
             let child = self.push_element(tri, input, level, rho, e) as usize;
-            // Exact quarter areas and the parent's normal keep push-pull exactly conservative.
+            // Exact quarter areas and the parent's normal keep push-pull exactly conservative; a
+            // piece inherits its parent's open share (only `contact` measures it).
             self.area[child] = parent_area * 0.25;
+            self.open_area[child] = open_quarter;
             self.normal[child] = self.normal[node];
             self.projected_bins[child] = projected_area_bins(self.normal[node], parent_area * 0.25);
             self.exitance[child] = exitance;
@@ -265,6 +299,15 @@ impl Nodes {
             }
         }
     }
+}
+
+/// The four pieces of 1→4 midpoint subdivision, in `Nodes::subdivide`'s child order: the three
+/// corner triangles, then the middle one. The midpoint of edge (a, b) is (a + b)·0.5, symmetric in a
+/// and b, so neighbours compute bit-identical vertices.
+pub fn quarters(corners: &[Vec3; 3]) -> [[Vec3; 3]; 4] {
+    let [a, b, c] = *corners;
+    let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+    [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
 }
 
 /// Fields of one new node.

@@ -3,7 +3,7 @@
 //! this sweep's values), pushes its irradiance to its children, and pulls their exitance back up as
 //! soon as they are done.
 
-use super::gather::{gather, leaf_exitance, pulled, Irradiance};
+use super::gather::{gather, leaf_exitance, on_open_part, pulled, Irradiance};
 use super::links::Links;
 use super::nodes::{mean_channel, Nodes};
 
@@ -36,7 +36,11 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, root: usize, relaxation: f64) -> 
         }
         let own = gather(nodes, links, n, &nodes.exitance);
         nodes.gathered[n] = own.mean(nodes.area[n], &nodes.projected_bins[n]);
-        let mut g = down.plus(&own);
+        let mut g = if nodes.open_area[n] > 0.0 {
+            down.plus(&on_open_part(nodes, n, own))
+        } else {
+            Irradiance::default() // all of it hidden (`contact`): nothing lands
+        };
         if !nodes.is_cluster[n] {
             // An element: every point below it has its normal.
             g = Irradiance::uniform(g.on_element(nodes.normal[n]));
