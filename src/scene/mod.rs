@@ -177,7 +177,7 @@ impl Default for AdaptiveSettings {
 /// session 10: at default quality the adaptive mesh's radiosity-mode relMSE is 56–89% below the
 /// uniform mesh's at equal time on cornell_original, l_room, alcove_hall and gap_room, and it keeps
 /// every final image (docs/performance.md, "Adaptive mesh").
-pub const AUTO_PREFERS_ADAPTIVE: bool = false;
+pub const AUTO_PREFERS_ADAPTIVE: bool = true;
 
 /// Predicted CPU seconds of the uniform matrix's hemicubes (`radiosity::matrix::cost`) above which
 /// `method = "auto"` keeps the uniform matrix rather than the adaptive mesh. The adaptive method keeps
