@@ -20,6 +20,13 @@ impl Pcg32 {
         rng
     }
 
+    /// A generator for stream `stream` seeded by this one's current state, which it leaves as it is:
+    /// a deterministic side stream (a different increment, so a different sequence) whose draws do not
+    /// shift this generator's.
+    pub fn fork(&self, stream: u64) -> Self {
+        Pcg32::new(self.state, stream)
+    }
+
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(MULTIPLIER).wrapping_add(self.inc);
@@ -60,6 +67,23 @@ mod tests {
         let c: Vec<u32> = (0..4).map(|_| 0).scan(Pcg32::new(7, 2), |r, _: u32| Some(r.next_u32())).collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
+    }
+
+    #[test]
+    fn a_fork_leaves_its_parent_as_it_was_and_draws_other_numbers() {
+        let mut parent = Pcg32::new(7, 1);
+        let mut untouched = parent.clone();
+        let mut fork = parent.fork(3);
+        let forked: Vec<u32> = (0..4).map(|_| fork.next_u32()).collect();
+        let after: Vec<u32> = (0..4).map(|_| parent.next_u32()).collect();
+        assert_eq!(after, (0..4).map(|_| untouched.next_u32()).collect::<Vec<_>>());
+        assert_ne!(forked, after);
+        assert_eq!(
+            forked,
+            (0..4).map(|_| 0).scan(Pcg32::new(7, 1).fork(3), |r, _: u32| Some(r.next_u32())).collect::<Vec<_>>()
+        );
+        let mut other = Pcg32::new(7, 1).fork(4);
+        assert_ne!(forked, (0..4).map(|_| other.next_u32()).collect::<Vec<_>>());
     }
 
     #[test]

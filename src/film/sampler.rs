@@ -126,6 +126,17 @@ impl Sampler {
         self.rng().next_u32()
     }
 
+    /// Independent numbers from a side stream `stream` forked off this sampler's (`Pcg32::fork`),
+    /// leaving this sampler as it was: an estimate drawn from the fork (a pilot gather, say) does not
+    /// change the numbers the sampler's own estimates draw next.
+    pub fn fork(&self, stream: u64) -> Sampler {
+        let rng = match self {
+            Sampler::Independent(rng) => rng,
+            Sampler::Pixel(p) => &p.rng,
+        };
+        Sampler::Independent(rng.fork(stream))
+    }
+
     fn rng(&mut self) -> &mut Pcg32 {
         match self {
             Sampler::Independent(rng) => rng,

@@ -353,10 +353,10 @@ pub struct RenderParams {
 /// at the point (docs/accuracy.md, "gap_room against a converged reference").
 pub const DEFAULT_NEAR_BOUNCE: f32 = 2.5;
 
-/// `gather_refine_error` by default. On gap_room (default preset, 256², seeds 1 / 2, relMSE against
-/// the converged image) off gives 0.00046 / 0.00061; 0.04 refines 30% of the records and gives
-/// 0.00035 / 0.00047 for about +20% CPU-s; 0.02 refines half of them for +30% (0.00043 / 0.00039)
-/// (docs/accuracy.md, "gap_room against a converged reference").
+/// `gather_refine_error` by default. On gap_room (default preset, 256², seeds 1–4, relMSE against
+/// the converged image) off gives mean 0.00056 (0.00061 at worst); 0.04 refines 30% of the records
+/// and gives 0.00044 / 0.00044 / 0.00041 / 0.00038 for +16% rays; 0.03 the same mean for +20%, 0.06
+/// misses 0.0005 on seed 2 (docs/accuracy.md, "The pilot on its own stream").
 pub const DEFAULT_GATHER_REFINE_ERROR: f32 = 0.04;
 
 /// `cache_accuracy` of the default preset (and of a scene with no preset). Measured on alcove_hall at

@@ -1,7 +1,9 @@
 //! Adaptive rays per irradiance-cache record: a small pilot gather estimates how noisy the record's
 //! own gather would be, and records whose hemisphere holds small bright regions (a patch of direct
 //! light, the view through a door: a few cells 10–20× the rest) gather `REFINE_FACTOR` times the rays.
-//! The pilot is thrown away, so the kept gather is independent of the decision and stays unbiased.
+//! The pilot is thrown away, so the kept gather is independent of the decision and stays unbiased, and
+//! it draws from a stream of its own (`PILOT_STREAM`, forked off the record's), so a record kept at the
+//! base count gathers exactly what it gathers with the refinement off.
 
 use glam::Vec3;
 
@@ -11,6 +13,8 @@ use crate::trace::whitted::{RayCounts, Tracer};
 
 /// Rays of the pilot gather (an 5 × 13 stratification).
 pub const PILOT_RAYS: u32 = 64;
+/// The pilot's side stream, forked off the record's sampler (`Sampler::fork`).
+const PILOT_STREAM: u64 = 0x9170_7A3E_5C1D_0001;
 /// A refined record gathers this many times `gather_rays`.
 pub const REFINE_FACTOR: u32 = 4;
 
@@ -63,8 +67,9 @@ impl Tracer<'_> {
 
     /// A record's gather at (p, n): over `base`, or, where `refinement`'s pilot predicts a relative error
     /// above its bound, over its `refined` strata; and whether it was refined. Unbiased either way: the
-    /// pilot's random numbers are drawn before, and apart from, the kept gather's, and each stratified
-    /// gather is unbiased at any M × N.
+    /// pilot draws from its own stream forked off `sampler` (which it leaves untouched), independent of
+    /// the kept gather's, and each stratified gather is unbiased at any M × N. A record kept at `base`
+    /// therefore returns the same bits as with `refinement` `None`.
     pub fn record_gather(
         &self,
         p: Vec3,
@@ -75,7 +80,7 @@ impl Tracer<'_> {
         counts: &mut RayCounts,
     ) -> (HemisphereEstimate, bool) {
         let refine = refinement.is_some_and(|r| {
-            let pilot = self.pilot_error(p, n, r.pilot, sampler, counts);
+            let pilot = self.pilot_error(p, n, r.pilot, &mut sampler.fork(PILOT_STREAM), counts);
             r.predicted_error(pilot, base) > r.error_bound
         });
         let strata = match refinement {
