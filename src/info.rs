@@ -113,7 +113,16 @@ fn pass_one_method(scene: &SceneDescription) -> String {
                 MethodChoice::Adaptive => Adaptive { solver: scene.radiosity.solver }.name(),
                 MethodChoice::Matrix | MethodChoice::Auto => method::for_params(&scene.radiosity).name(),
             };
-            (name, format!(" (auto: {reason})"))
+            // Shards cannot split the adaptive levels: say what they take instead (`shard_method`).
+            let shards = match choice {
+                MethodChoice::Adaptive => format!(
+                    "; under --shard/--merge {} on the uniform mesh (the adaptive levels each need the whole \
+                     solve of the level before)",
+                    method::for_params(&scene.radiosity).name()
+                ),
+                _ => String::new(),
+            };
+            (name, format!(" (auto: {reason}){shards}"))
         }
         _ => (method::for_scene(scene).name(), String::new()),
     };

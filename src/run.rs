@@ -30,7 +30,7 @@ use crate::radiosity::resume::{self, Checkpointer, Resume, ShardError};
 use crate::radiosity::solution_file::{self, SolutionFileError, SolutionMesh};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
-use crate::scene::{self, FinalGatherMode, Overrides, SceneDescription, SceneError};
+use crate::scene::{self, FinalGatherMode, MethodChoice, Overrides, SceneDescription, SceneError};
 use crate::trace::camera::PinholeCamera;
 use crate::trace::gather;
 use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
@@ -226,7 +226,7 @@ impl Runner {
         // One set of photons for both passes of this job (traced only if a pass needs them).
         let photons = RunPhotons::default();
         if let (Work::Solve { output }, Some(shard)) = (&job.work, self.reuse.resume.shard) {
-            match method::shard_method(&scene).map_err(MethodError::from)? {
+            match shard_method_noted(&scene, progress)? {
                 ShardMethod::Matrix(_) if !self.reuse.resume.merge.is_empty() => {
                     return Err(MethodError::from(ShardError::MatrixRounds).into());
                 }
@@ -297,19 +297,29 @@ impl Runner {
         }
         let resume = &self.reuse.resume;
         let method: Box<dyn method::PassOneMethod> = if resume.needs_matrix() {
-            match method::shard_method(scene).map_err(MethodError::from)? {
+            match shard_method_noted(scene, progress)? {
                 ShardMethod::Matrix(matrix) => Box::new(matrix),
                 ShardMethod::Hierarchy(hierarchy) => Box::new(hierarchy),
             }
         } else {
-            method::for_scene(scene)
+            let (method, why) = method::for_scene_with_reason(scene);
+            if let (Some(why), Verbosity::Verbose) = (why, progress.verbosity()) {
+                progress.note(&format!("pass one: {} (auto: {why})", method.name()));
+            }
+            method
         };
         if !method.checkpoints() && resume.checkpoint.is_some() {
-            progress.note(&format!(
-                "warning: the {} method keeps no checkpoint: if this run is interrupted, rerunning it restarts \
-                 pass one from the beginning",
-                method.name()
-            ));
+            // `auto` gives the adaptive mesh (the one method off the uniform mesh without a checkpoint)
+            // only scenes that solve in well under a minute (`scene::AUTO_ADAPTIVE_CPU_SECONDS`).
+            let small_by_auto = scene.radiosity.method == MethodChoice::Auto && !method.uses_uniform_mesh();
+            if !small_by_auto || progress.verbosity() == Verbosity::Verbose {
+                progress.note(&format!(
+                    "{}the {} method keeps no checkpoint: if this run is interrupted, rerunning it restarts pass \
+                     one from the beginning",
+                    if small_by_auto { "" } else { "warning: " },
+                    method.name()
+                ));
+            }
             // Nothing to save: a signal ends the run at once (one that came already ends it here).
             resume.cancel.exit_at_once(true);
             if let Some(signal) = resume.cancel.signal() {
@@ -347,6 +357,20 @@ impl Runner {
         }
         Ok((done.mesh, solution))
     }
+}
+
+/// `method::shard_method`, noting under `-v` why `method = "auto"` chose it (it falls back from the
+/// adaptive mesh to the uniform matrix there).
+fn shard_method_noted(scene: &SceneDescription, progress: &Progress) -> Result<ShardMethod, MethodError> {
+    let (chosen, why) = method::shard_method(scene)?;
+    if let (Some(why), Verbosity::Verbose) = (why, progress.verbosity()) {
+        let name = match &chosen {
+            ShardMethod::Matrix(matrix) => method::PassOneMethod::name(matrix),
+            ShardMethod::Hierarchy(hierarchy) => method::PassOneMethod::name(hierarchy),
+        };
+        progress.note(&format!("pass one: {name} (auto: {why})"));
+    }
+    Ok(chosen)
 }
 
 /// A saved solution and the mesh it lives on: the leaf mesh it carries (hierarchical), the scene's

@@ -134,7 +134,7 @@ fn adaptive_batch(dir: &Path, jobs: &[(&str, u32, &str)], args: &[&str]) -> Vec<
 }
 
 #[test]
-fn a_batch_reuses_an_adaptive_solution_for_a_new_view_and_re_solves_new_materials_like_a_fresh_run() {
+fn a_batch_reuses_an_adaptive_solution_for_a_new_view_and_level_zero_form_factors_for_new_materials() {
     let dir = tempfile::tempdir().unwrap();
     let jobs =
         adaptive_batch(dir.path(), &[("a.png", 16, ""), ("b.png", 12, SIDE_VIEW), ("c.png", 16, BLUE_LIGHT)], &[]);
@@ -142,11 +142,25 @@ fn a_batch_reuses_an_adaptive_solution_for_a_new_view_and_re_solves_new_material
     assert_eq!(jobs[2]["reused_solution"], false, "new emission is a new solution");
     // The materials-only job alone, in a fresh batch (nothing cached), gives the same bytes.
     let fresh = tempfile::tempdir().unwrap();
-    adaptive_batch(fresh.path(), &[("c.png", 16, BLUE_LIGHT)], &[]);
+    let alone = adaptive_batch(fresh.path(), &[("c.png", 16, BLUE_LIGHT)], &[]);
     assert_eq!(
         std::fs::read(dir.path().join("c.png")).unwrap(),
         std::fs::read(fresh.path().join("c.png")).unwrap(),
         "the re-solve after a materials-only change is a fresh solve's"
+    );
+    // ... but it drew no hemicubes for the patches: level 0's rows came from job a, and only the
+    // refined level's new rows were computed.
+    let (reused, alone) = (&jobs[2]["stats"]["adaptive"], &alone[0]["stats"]["adaptive"]);
+    let patches = alone["elements_per_level"][0].as_u64().unwrap();
+    assert!(patches > 0, "{alone}");
+    assert_eq!(jobs[2]["reused_form_factors"], true);
+    assert_eq!(alone["rows_reused"].as_u64(), Some(0), "{alone}");
+    assert_eq!(reused["rows_reused"].as_u64(), Some(patches), "{reused}");
+    assert_eq!(reused["elements_per_level"], alone["elements_per_level"], "the same refinement");
+    assert_eq!(
+        reused["rows_computed"].as_u64().unwrap(),
+        alone["rows_computed"].as_u64().unwrap() - patches,
+        "{reused} against {alone}"
     );
     assert_ne!(
         std::fs::read(dir.path().join("a.png")).unwrap(),
@@ -189,6 +203,53 @@ fn adaptive_runs_warn_that_they_keep_no_checkpoint_and_refuse_shards() {
     assert!(!part.exists());
 }
 
+/// `scenes/cornell_box.toml` with `method = "auto"` and `auto_adaptive = true` (whatever the default),
+/// written to `dir`.
+fn auto_adaptive_cornell(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(scene_path("cornell_box.toml")).unwrap();
+    let text = text.replacen("[radiosity]\n", "[radiosity]\nmethod = \"auto\"\nauto_adaptive = true\n", 1);
+    let text = text.replace("obj = \"", &format!("obj = \"{}/", scene_path("").display()));
+    let path = dir.join("cornell.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn auto_shards_and_merges_on_the_uniform_matrix_where_it_would_take_the_adaptive_mesh_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = auto_adaptive_cornell(dir.path());
+    let scene = scene.to_str().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let solve = |extra: &[&str]| {
+        let mut a = vec!["solve", scene, "--quality", "preview", "-v"];
+        a.extend(extra);
+        let out = radray(&a);
+        assert!(out.status.success(), "{}", stderr(&out));
+        stderr(&out)
+    };
+    const WHY: &str = "--shard/--merge take the uniform matrix";
+    // Alone, auto takes the adaptive mesh and -v says so.
+    let said = solve(&["-o", &path("auto.radsol")]);
+    assert!(said.contains("pass one: adaptive") && !said.contains(WHY), "{said}");
+    // A shard and the merge fall back to the matrix, with the reason, instead of refusing.
+    for k in ["0/2", "1/2"] {
+        let said = solve(&["-o", &path(&format!("part{}", &k[..1])), "--shard", k]);
+        assert!(said.contains("pass one: gauss-seidel") && said.contains(WHY), "{said}");
+    }
+    let said = solve(&["-o", &path("merged.radsol"), "--merge", &path("part0"), &path("part1")]);
+    assert!(said.contains(WHY), "{said}");
+    // ... and the merged solution is the uniform matrix's, byte for byte.
+    solve(&["-o", &path("matrix.radsol"), "--method", "matrix"]);
+    let read = |name: &str| std::fs::read(dir.path().join(name)).unwrap();
+    assert_eq!(read("merged.radsol"), read("matrix.radsol"));
+    assert_ne!(read("auto.radsol"), read("matrix.radsol"), "alone, auto solved the adaptive mesh");
+    // `info` says what shards take.
+    let out = radray(&["info", scene, "--quality", "preview"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout.lines().find(|l| l.starts_with("pass one")).unwrap_or_default();
+    assert!(line.contains("adaptive") && line.contains("under --shard/--merge gauss-seidel"), "{stdout}");
+}
+
 #[test]
 fn auto_picks_the_adaptive_mesh_only_when_auto_adaptive_says_so_and_never_through_mirrors_or_glass() {
     use radray::radiosity::method::{auto_method, for_scene};
@@ -203,6 +264,13 @@ fn auto_picks_the_adaptive_mesh_only_when_auto_adaptive_says_so_and_never_throug
     let (choice, reason) = auto_method(&cornell);
     assert_eq!(choice, MethodChoice::Adaptive, "{reason}");
     assert!(for_scene(&cornell).name().starts_with("adaptive"), "{}", for_scene(&cornell).name());
+    // A finer mesh whose uniform hemicubes are predicted above AUTO_ADAPTIVE_CPU_SECONDS keeps the
+    // matrix, which checkpoints its rows (the adaptive mesh keeps no checkpoint).
+    let mut fine = cornell.clone();
+    fine.radiosity.max_element_edge = 15.0;
+    let (choice, reason) = auto_method(&fine);
+    assert_eq!(choice, MethodChoice::Matrix, "{reason}");
+    assert!(reason.contains("keeps no checkpoint"), "{reason}");
     // Matrix-free shooting was asked for: the adaptive mesh would store matrices.
     cornell.radiosity.store_form_factors = false;
     assert_eq!(auto_method(&cornell).0, MethodChoice::Matrix);

@@ -23,7 +23,7 @@ use crate::cache::Lru;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::{
-    MethodChoice, RadiosityParams, SceneDescription, SolverKind, AUTO_MATRIX_CPU_SECONDS,
+    MethodChoice, RadiosityParams, SceneDescription, SolverKind, AUTO_ADAPTIVE_CPU_SECONDS, AUTO_MATRIX_CPU_SECONDS,
     AUTO_MATRIX_CPU_SECONDS_SPECULAR,
 };
 use crate::transport::photons::RunPhotons;
@@ -104,6 +104,23 @@ impl Reuse {
         self.hierarchy_links.insert(key, links, bytes)
     }
 
+    /// The form factors an earlier job left under `key` (`fingerprint::form_factor_key`), if still kept.
+    pub fn form_factors(&mut self, key: u64) -> Option<Arc<FormFactors>> {
+        self.form_factors.get(key).cloned()
+    }
+
+    /// Keeps form factors for later jobs (nothing when this keeps nothing), charging their bytes to
+    /// the budget both caches share (kept hierarchies are evicted first). Returns whether they were
+    /// kept.
+    pub fn keep_form_factors(&mut self, key: u64, ff: Arc<FormFactors>) -> bool {
+        if !self.keep {
+            return false;
+        }
+        let bytes = ff.memory_bytes() as u64;
+        self.hierarchy_links.make_room(self.form_factors.used_bytes() + bytes);
+        self.form_factors.insert(key, ff, bytes)
+    }
+
     /// Keeps scenes' form factors for the jobs after them, within the default budget.
     pub fn across_jobs() -> Self {
         Reuse::across_jobs_within(crate::cache::DEFAULT_BUDGET_BYTES)
@@ -172,45 +189,136 @@ pub fn for_params(params: &RadiosityParams) -> Box<dyn PassOneMethod> {
 /// The scene's method (`[radiosity] method`): `matrix` is `for_params`; `hierarchical` is
 /// `Hierarchical`; `adaptive` is `Adaptive`; `auto` is what `auto_method` picks.
 pub fn for_scene(scene: &SceneDescription) -> Box<dyn PassOneMethod> {
-    let choice = match scene.radiosity.method {
-        MethodChoice::Auto => auto_method(scene).0,
-        chosen => chosen,
+    for_scene_with_reason(scene).0
+}
+
+/// `for_scene`, with `auto_method`'s reason when the scene says `method = "auto"`.
+pub fn for_scene_with_reason(scene: &SceneDescription) -> (Box<dyn PassOneMethod>, Option<String>) {
+    let (choice, why) = match scene.radiosity.method {
+        MethodChoice::Auto => {
+            let (choice, why) = auto_method(scene);
+            (choice, Some(why))
+        }
+        chosen => (chosen, None),
     };
-    match choice {
+    let method: Box<dyn PassOneMethod> = match choice {
         MethodChoice::Hierarchical => Box::new(Hierarchical),
         MethodChoice::Adaptive => Box::new(super::adaptive::Adaptive { solver: scene.radiosity.solver }),
         MethodChoice::Matrix | MethodChoice::Auto => for_params(&scene.radiosity),
-    }
+    };
+    (method, why)
 }
 
 /// What `method = "auto"` picks for `scene`, and why: the hierarchy when `auto_prefers_hierarchy`
 /// says the uniform mesh is out of reach, else the adaptive mesh when `auto_prefers_adaptive` says
 /// so, else the uniform mesh's matrix (`MethodChoice::Matrix`: `for_params`).
 pub fn auto_method(scene: &SceneDescription) -> (MethodChoice, String) {
-    if let Some(reason) = auto_prefers_hierarchy(scene) {
-        return (MethodChoice::Hierarchical, reason);
-    }
-    match auto_prefers_adaptive(scene) {
-        Some(reason) => (MethodChoice::Adaptive, reason),
-        None => (MethodChoice::Matrix, "the uniform mesh fits".to_string()),
+    match uniform_outlook(scene) {
+        Err(reason) => (MethodChoice::Hierarchical, reason),
+        Ok(outlook) => match adaptive_choice(&scene.radiosity, outlook.as_ref()) {
+            Ok(reason) => (MethodChoice::Adaptive, reason),
+            Err(why_not) => (MethodChoice::Matrix, format!("the uniform mesh fits; {why_not}")),
+        },
     }
 }
 
-/// Why `method = "auto"` takes the adaptive mesh for a scene the uniform matrix can take (the caller
-/// has asked `auto_prefers_hierarchy` first), or `None` to keep the uniform mesh: only when
-/// `auto_adaptive` is on (`AUTO_PREFERS_ADAPTIVE` unless the scene says), the matrix is stored
-/// (`store_form_factors`), and the uniform mesh has no mirrors or glass (the adaptive levels before
-/// the last are solved without extended form factors, so their splits miss light through them).
-pub fn auto_prefers_adaptive(scene: &SceneDescription) -> Option<String> {
+/// What `method = "auto"` picks under `--shard` or `--merge`, and why: `auto_method`'s choice, except
+/// that the adaptive mesh falls back to the uniform matrix (its levels each need the whole solve of
+/// the level before, so they cannot be sharded), with the reason saying so.
+pub fn auto_method_for_shards(scene: &SceneDescription) -> (MethodChoice, String) {
+    match auto_method(scene) {
+        (MethodChoice::Adaptive, reason) => (
+            MethodChoice::Matrix,
+            format!(
+                "{reason}, but --shard/--merge take the uniform matrix: the adaptive mesh's levels each need the \
+                 whole solve of the level before"
+            ),
+        ),
+        other => other,
+    }
+}
+
+/// The uniform mesh as `auto` sees it once it fits: its matrix's predicted hemicube CPU time and
+/// whether it has mirrors or glass (`None` with `store_form_factors = false`: nothing is predicted).
+struct UniformOutlook {
+    cpu_seconds: f64,
+    specular: bool,
+}
+
+/// `Err(why)` when `auto` leaves the uniform mesh for the hierarchy (`auto_prefers_hierarchy`), else
+/// what it predicted for the uniform matrix.
+fn uniform_outlook(scene: &SceneDescription) -> Result<Option<UniformOutlook>, String> {
     let params = &scene.radiosity;
-    if !params.adaptive.auto || !params.store_form_factors {
-        return None;
+    let elements = crate::mesh::count_elements(scene, params.max_element_edge);
+    if elements > crate::run::MAX_ELEMENTS {
+        return Err(format!("{elements} uniform elements, over the limit of {}", crate::run::MAX_ELEMENTS));
+    }
+    if !params.store_form_factors {
+        return Ok(None);
+    }
+    let bytes = form_factors::matrix_bytes_from_counts(elements as usize, elements as usize, params);
+    let budget = params.hierarchy.memory_bytes.min(available_memory_bytes().unwrap_or(u64::MAX));
+    if bytes > budget {
+        return Err(format!(
+            "the full matrix of {elements} elements would take about {:.1} GB, over the budget of {:.1} GB",
+            bytes as f64 / 1e9,
+            budget as f64 / 1e9
+        ));
     }
     let mesh = Mesh::build(scene, params.max_element_edge);
-    if specular::mesh_has_specular(&mesh, &scene.materials) {
-        return None;
+    let estimate = matrix_estimate(scene, &mesh);
+    let specular = specular::mesh_has_specular(&mesh, &scene.materials);
+    let (limit, kind) = if specular {
+        (AUTO_MATRIX_CPU_SECONDS_SPECULAR, " for a scene with mirrors or glass")
+    } else {
+        (AUTO_MATRIX_CPU_SECONDS, "")
+    };
+    if estimate.cpu_seconds > limit {
+        return Err(format!(
+            "the full matrix of {elements} elements would take about {:.0} CPU-s of hemicubes, over the limit of {limit} CPU-s{kind}",
+            estimate.cpu_seconds
+        ));
     }
-    Some("the uniform mesh fits, no mirrors or glass, and auto_adaptive is on".to_string())
+    Ok(Some(UniformOutlook { cpu_seconds: estimate.cpu_seconds, specular }))
+}
+
+/// `Ok(why)` when `auto` takes the adaptive mesh for a scene whose uniform matrix fits (`outlook`),
+/// else `Err(why not)`: only when `auto_adaptive` is on (`AUTO_PREFERS_ADAPTIVE` unless the scene
+/// says), the matrix is stored (`store_form_factors`), the uniform mesh has no mirrors or glass (the
+/// adaptive levels before the last are solved without extended form factors, so their splits miss
+/// light through them), and its hemicubes are predicted at most `AUTO_ADAPTIVE_CPU_SECONDS` (the
+/// adaptive method keeps no checkpoint, so it takes only scenes that solve in well under a minute).
+fn adaptive_choice(params: &RadiosityParams, outlook: Option<&UniformOutlook>) -> Result<String, String> {
+    if !params.adaptive.auto {
+        return Err("auto_adaptive is off".to_string());
+    }
+    let Some(outlook) = outlook else {
+        return Err("store_form_factors = false asks for matrix-free shooting".to_string());
+    };
+    if outlook.specular {
+        return Err("mirrors or glass keep the uniform matrix (extended form factors on every level)".to_string());
+    }
+    if outlook.cpu_seconds > AUTO_ADAPTIVE_CPU_SECONDS {
+        return Err(format!(
+            "about {:.0} CPU-s of hemicubes, over the adaptive mesh's limit of {AUTO_ADAPTIVE_CPU_SECONDS} CPU-s \
+             (it keeps no checkpoint; the matrix does)",
+            outlook.cpu_seconds
+        ));
+    }
+    Ok(format!(
+        "the uniform mesh fits (about {:.0} CPU-s of hemicubes, at most {AUTO_ADAPTIVE_CPU_SECONDS}), no mirrors or \
+         glass, and auto_adaptive is on",
+        outlook.cpu_seconds
+    ))
+}
+
+/// Why `method = "auto"` takes the adaptive mesh for a scene the uniform matrix can take
+/// (`adaptive_choice`), or `None` when it keeps the uniform mesh or leaves it for the hierarchy.
+pub fn auto_prefers_adaptive(scene: &SceneDescription) -> Option<String> {
+    match auto_method(scene) {
+        (MethodChoice::Adaptive, reason) => Some(reason),
+        _ => None,
+    }
 }
 
 /// Why `method = "auto"` leaves the uniform mesh for the hierarchy, or `None` to keep it. With
@@ -222,37 +330,7 @@ pub fn auto_prefers_adaptive(scene: &SceneDescription) -> Option<String> {
 /// (`AUTO_MATRIX_CPU_SECONDS_SPECULAR` when the mesh has mirrors or glass: the hierarchy transports
 /// diffuse light only, so it would lose the light through them).
 pub fn auto_prefers_hierarchy(scene: &SceneDescription) -> Option<String> {
-    let params = &scene.radiosity;
-    let elements = crate::mesh::count_elements(scene, params.max_element_edge);
-    if elements > crate::run::MAX_ELEMENTS {
-        return Some(format!("{elements} uniform elements, over the limit of {}", crate::run::MAX_ELEMENTS));
-    }
-    if !params.store_form_factors {
-        return None;
-    }
-    let bytes = form_factors::matrix_bytes_from_counts(elements as usize, elements as usize, params);
-    let budget = params.hierarchy.memory_bytes.min(available_memory_bytes().unwrap_or(u64::MAX));
-    if bytes > budget {
-        return Some(format!(
-            "the full matrix of {elements} elements would take about {:.1} GB, over the budget of {:.1} GB",
-            bytes as f64 / 1e9,
-            budget as f64 / 1e9
-        ));
-    }
-    let mesh = Mesh::build(scene, params.max_element_edge);
-    let estimate = matrix_estimate(scene, &mesh);
-    let (limit, kind) = if specular::mesh_has_specular(&mesh, &scene.materials) {
-        (AUTO_MATRIX_CPU_SECONDS_SPECULAR, " for a scene with mirrors or glass")
-    } else {
-        (AUTO_MATRIX_CPU_SECONDS, "")
-    };
-    if estimate.cpu_seconds > limit {
-        return Some(format!(
-            "the full matrix of {elements} elements would take about {:.0} CPU-s of hemicubes, over the limit of {limit} CPU-s{kind}",
-            estimate.cpu_seconds
-        ));
-    }
-    None
+    uniform_outlook(scene).err()
 }
 
 /// The full matrix of `mesh` predicted from a sample of its hemicubes (`form_factors::estimate`),
@@ -532,9 +610,7 @@ impl PassOneMethod for FullMatrix {
                 let ff = Arc::new(rows.ff);
                 if let Some(key) = key {
                     // The budget is shared with kept hierarchies (none in a matrix-only batch).
-                    let bytes = ff.memory_bytes() as u64;
-                    reuse.hierarchy_links.make_room(reuse.form_factors.used_bytes() + bytes);
-                    reuse.form_factors.insert(key, ff.clone(), bytes);
+                    reuse.keep_form_factors(key, ff.clone());
                 }
                 (ff, false)
             }
@@ -581,16 +657,24 @@ pub enum ShardMethod {
 }
 
 /// The scene's method for `--shard` and `--merge`: the stored matrix on the uniform mesh, or the
-/// hierarchy; else `ShardError::NotMatrix` (matrix-free shooting, and the adaptive mesh, whose levels
-/// each need the whole solve of the level before).
-pub fn shard_method(scene: &SceneDescription) -> Result<ShardMethod, ShardError> {
-    let method = for_scene(scene);
+/// hierarchy; else `ShardError::NotMatrix` (matrix-free shooting, and an explicit `method =
+/// "adaptive"`, whose levels each need the whole solve of the level before). `method = "auto"` takes
+/// the uniform matrix where it would have taken the adaptive mesh (`auto_method_for_shards`); the
+/// reason is returned for `-v`.
+pub fn shard_method(scene: &SceneDescription) -> Result<(ShardMethod, Option<String>), ShardError> {
+    let (method, why): (Box<dyn PassOneMethod>, _) = match scene.radiosity.method {
+        MethodChoice::Auto => match auto_method_for_shards(scene) {
+            (MethodChoice::Hierarchical, why) => (Box::new(Hierarchical), Some(why)),
+            (_, why) => (for_params(&scene.radiosity), Some(why)),
+        },
+        _ => (for_scene(scene), None),
+    };
     // The full matrix is the one method on the uniform mesh that checkpoints, the hierarchy the one
     // off it.
     if method.uses_uniform_mesh() && method.checkpoints() && scene.radiosity.store_form_factors {
-        Ok(ShardMethod::Matrix(FullMatrix { solver: scene.radiosity.solver }))
+        Ok((ShardMethod::Matrix(FullMatrix { solver: scene.radiosity.solver }), why))
     } else if !method.uses_uniform_mesh() && method.checkpoints() {
-        Ok(ShardMethod::Hierarchy(Hierarchical))
+        Ok((ShardMethod::Hierarchy(Hierarchical), why))
     } else {
         Err(ShardError::NotMatrix { scene: scene.path.display().to_string(), method: method.name() })
     }

@@ -48,12 +48,14 @@ pub struct PassOneStats {
 }
 
 /// The levels of `method = "adaptive"`: elements solved at each, form-factor rows computed by
-/// hemicubes and rows kept from the level before (substructuring).
+/// hemicubes, rows kept from the level before (substructuring) and level 0's rows taken from an
+/// earlier job of a batch with the same geometry (a materials-only change).
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct AdaptiveStats {
     pub elements_per_level: Vec<usize>,
     pub rows_computed: usize,
     pub rows_kept: usize,
+    pub rows_reused: usize,
 }
 
 /// Rows taken from a checkpoint or merged parts and rows computed by this run, and the checkpoint

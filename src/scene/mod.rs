@@ -171,12 +171,20 @@ impl Default for AdaptiveSettings {
     }
 }
 
-/// Whether `method = "auto"` solves scenes that stay off the hierarchy, have no mirrors or glass and
-/// store their matrix on the adaptive mesh instead of the uniform one, when the scene does not say
-/// (`auto_adaptive`). Off until its accuracy is measured on every shipped scene: the uniform matrix
-/// keeps their bytes (tests/golden_bytes.rs), and adaptive pays on alcove_hall and cornell_original
-/// but not yet on l_room (closing note of session 8).
-pub const AUTO_PREFERS_ADAPTIVE: bool = false;
+/// Whether `method = "auto"` solves scenes that stay off the hierarchy, have no mirrors or glass,
+/// store their matrix and predict at most `AUTO_ADAPTIVE_CPU_SECONDS` of uniform hemicubes on the
+/// adaptive mesh instead of the uniform one, when the scene does not say (`auto_adaptive`). On since
+/// session 10: at default quality the adaptive mesh's radiosity-mode relMSE is 56–89% below the
+/// uniform mesh's at equal time on cornell_original, l_room, alcove_hall and gap_room, and it keeps
+/// every final image (docs/performance.md, "Adaptive mesh").
+pub const AUTO_PREFERS_ADAPTIVE: bool = true;
+
+/// Predicted CPU seconds of the uniform matrix's hemicubes (`radiosity::matrix::cost`) above which
+/// `method = "auto"` keeps the uniform matrix rather than the adaptive mesh. The adaptive method keeps
+/// no checkpoint (each level needs the whole solve of the one before), so auto gives it only scenes
+/// that solve in well under a minute; the matrix checkpoints its rows. The shipped diffuse scenes
+/// predict 2–8 CPU-s at `default`.
+pub const AUTO_ADAPTIVE_CPU_SECONDS: f64 = 20.0;
 
 /// Which pass-one method solves the scene (`[radiosity] method`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -185,8 +193,9 @@ pub enum MethodChoice {
     /// The full matrix (or matrix-free shooting with `store_form_factors = false`) when its predicted
     /// matrix fits the memory budget and its predicted hemicube CPU time is under
     /// `AUTO_MATRIX_CPU_SECONDS`; the hierarchy otherwise (`radiosity::method::auto_prefers_hierarchy`).
-    /// With `auto_adaptive` (`AUTO_PREFERS_ADAPTIVE`) the matrix's diffuse scenes go to the adaptive
-    /// mesh (`radiosity::method::auto_method`).
+    /// With `auto_adaptive` (`AUTO_PREFERS_ADAPTIVE`) the matrix's small diffuse scenes
+    /// (`AUTO_ADAPTIVE_CPU_SECONDS`) go to the adaptive mesh (`radiosity::method::auto_method`), except
+    /// under `--shard`/`--merge` (`radiosity::method::shard_method`).
     #[default]
     Auto,
     /// The uniform mesh and the full matrix (or matrix-free shooting), whatever the scene's size.

@@ -9,7 +9,9 @@
 //! interpolated value (`hanging`), so the image has no T-vertex cracks. Every level is a plain
 //! row-independent matrix solve, so the bytes are the same at any thread count; light through
 //! mirrors and glass (extended form factors, photons) is followed on the final mesh only: with them,
-//! the levels before it are plain, at half the hemicube resolution, and no rows are kept.
+//! the levels before it are plain, at half the hemicube resolution, and no rows are kept. A batch
+//! keeps level 0's plain rows (`level_zero_key`): they depend on geometry only, so a job that changes
+//! only materials solves its patches from them and draws hemicubes only for the refined levels.
 
 pub mod criterion;
 pub mod hanging;
@@ -29,7 +31,7 @@ use super::solution::Solution;
 use super::solver;
 use super::stats::PassOneStats;
 use crate::mesh::Mesh;
-use crate::progress::Progress;
+use crate::progress::{Progress, Verbosity};
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
 use crate::transport::photons::RunPhotons;
 use refinement::Refinement;
@@ -49,12 +51,16 @@ pub struct Adaptive {
     pub solver: SolverKind,
 }
 
-/// The solved mesh of one level, with what it cost.
+/// The solved mesh of one level, with its form factors.
 struct Level {
     mesh: Mesh,
     solution: Solution,
-    ff: FormFactors,
+    ff: Arc<FormFactors>,
 }
+
+/// Mixed into level 0's form-factor key (`level_zero_key`), so that a batch never takes the patch
+/// mesh's plain rows for the full matrix's (extended through mirrors and glass) or the other way.
+const LEVEL_ZERO_TAG: u64 = 0x6164_6170_7469_7630; // "adaptiv0"
 
 /// Elements no refinement may split: both sides of two-sided surfaces (the back side mirrors the
 /// front's grid) and elements buried under the back of a one-sided surface (never seen).
@@ -76,8 +82,28 @@ impl Adaptive {
         RadiosityParams { solver: self.solver, ..scene.radiosity.clone() }
     }
 
-    /// Hemicube form factors of `mesh` (through mirrors and glass when `photons` is given) and the
-    /// solve, with conforming values at the hanging vertices.
+    /// The settings a level is solved with: the scene's, or, for levels that only decide where to
+    /// split (`full_resolution` false), half its hemicube resolution.
+    fn level_params(&self, scene: &SceneDescription, full_resolution: bool) -> RadiosityParams {
+        let mut params = self.params(scene);
+        if !full_resolution {
+            params.hemicube_resolution_px = (params.hemicube_resolution_px / 2).max(MIN_PROBE_RESOLUTION_PX);
+        }
+        params
+    }
+
+    /// The key under which a batch keeps level 0's form factors of `patches`, solved plain (without
+    /// the photons' paths through mirrors and glass) with `level_params(full_resolution)`: what they
+    /// depend on (`fingerprint::form_factor_key`: geometry, specular materials, which elements reflect
+    /// or emit, hemicube settings), so a materials-only change (Kd, Ke) finds them.
+    fn level_zero_key(&self, scene: &SceneDescription, patches: &Mesh, full_resolution: bool) -> u64 {
+        let params = self.level_params(scene, full_resolution);
+        super::fingerprint::form_factor_key(patches, &scene.materials, &params) ^ LEVEL_ZERO_TAG
+    }
+
+    /// Hemicube form factors of `mesh` (through mirrors and glass when `photons` is given; `reused`
+    /// when an earlier job of a batch left them) and the solve, with conforming values at the hanging
+    /// vertices.
     #[allow(clippy::too_many_arguments)]
     fn solve_level(
         &self,
@@ -86,45 +112,61 @@ impl Adaptive {
         midpoints: &EdgeMidpoints,
         photons: Option<&RunPhotons>,
         kept: Option<&PartialRows>,
+        reused: Option<Arc<FormFactors>>,
         level: u32,
         full_resolution: bool,
         progress: &Progress,
         stats: &mut PassOneStats,
     ) -> Result<Level, MethodError> {
-        check_matrix_fits(scene, &mesh, form_factor_bytes_bound(&mesh, &scene.radiosity))?;
-        let mut params = self.params(scene);
-        if !full_resolution {
-            // Levels that only decide where to split see the scene at half the hemicube resolution.
-            params.hemicube_resolution_px = (params.hemicube_resolution_px / 2).max(MIN_PROBE_RESOLUTION_PX);
-        }
-        let stage =
-            progress.stage(&format!("form factors (adaptive level {level})"), mesh.elements.len() as u64, "elements");
-        let start = Instant::now();
-        let accel = photons.and_then(|_| specular_accel(scene, &mesh));
-        let paths = match (&accel, photons) {
-            (Some(accel), Some(photons)) => Some(specular_paths(scene, &mesh, accel, photons)),
-            _ => None,
-        };
-        let plan = RowPlan { known: kept, selected: &|_| true, stop: &|| false, after_batch: None };
-        let rows = form_factors::compute_planned(&mesh, &params, paths.as_ref(), plan, &|| stage.inc(1));
+        // Levels that only decide where to split see the scene at half the hemicube resolution.
+        let params = self.level_params(scene, full_resolution);
         let adaptive = stats.adaptive.get_or_insert_with(Default::default);
         adaptive.elements_per_level.push(mesh.elements.len());
-        adaptive.rows_kept += kept.map_or(0, PartialRows::done_count);
-        adaptive.rows_computed += rows.done.len() - kept.map_or(0, PartialRows::done_count);
-        let ff = rows.ff;
-        let seconds = start.elapsed().as_secs_f64();
-        stage.finish(&format!(
-            "level {level}: {} elements, {} non-zeros ({:.1} MiB)",
-            mesh.elements.len(),
-            ff.nnz(),
-            ff.memory_bytes() as f64 / (1 << 20) as f64
-        ));
-        stats.form_factor_seconds += seconds;
+        let ff = match reused {
+            Some(ff) => {
+                adaptive.rows_reused += ff.len();
+                if progress.verbosity() == Verbosity::Verbose {
+                    progress.note(&format!(
+                        "form factors (adaptive level {level}): {} elements, {} non-zeros reused from an earlier job",
+                        mesh.elements.len(),
+                        ff.nnz()
+                    ));
+                }
+                ff
+            }
+            None => {
+                check_matrix_fits(scene, &mesh, form_factor_bytes_bound(&mesh, &scene.radiosity))?;
+                let stage = progress.stage(
+                    &format!("form factors (adaptive level {level})"),
+                    mesh.elements.len() as u64,
+                    "elements",
+                );
+                let start = Instant::now();
+                let accel = photons.and_then(|_| specular_accel(scene, &mesh));
+                let paths = match (&accel, photons) {
+                    (Some(accel), Some(photons)) => Some(specular_paths(scene, &mesh, accel, photons)),
+                    _ => None,
+                };
+                let plan = RowPlan { known: kept, selected: &|_| true, stop: &|| false, after_batch: None };
+                let rows = form_factors::compute_planned(&mesh, &params, paths.as_ref(), plan, &|| stage.inc(1));
+                adaptive.rows_kept += kept.map_or(0, PartialRows::done_count);
+                adaptive.rows_computed += rows.done.len() - kept.map_or(0, PartialRows::done_count);
+                let ff = rows.ff;
+                stage.finish(&format!(
+                    "level {level}: {} elements, {} non-zeros ({:.1} MiB)",
+                    mesh.elements.len(),
+                    ff.nnz(),
+                    ff.memory_bytes() as f64 / (1 << 20) as f64
+                ));
+                stats.form_factor_seconds += start.elapsed().as_secs_f64();
+                stats.specular_pixels = rows.specular.pixels;
+                stats.specular_rays = rows.specular.rays;
+                stats.extended_nonzeros = rows.specular.entries;
+                Arc::new(ff)
+            }
+        };
         stats.form_factor_nonzeros = ff.nnz();
         stats.form_factor_bytes = stats.form_factor_bytes.max(ff.memory_bytes());
-        stats.specular_pixels = rows.specular.pixels;
-        stats.specular_rays = rows.specular.rays;
-        stats.extended_nonzeros = rows.specular.entries;
         // Boundary vertices extrapolated from the elements inside (`boundary_vertices`, with the split
         // edges' midpoints so that a T-junction is not a boundary), then the hanging ones given their
         // edge's value.
@@ -179,7 +221,7 @@ impl PassOneMethod for Adaptive {
         &self,
         scene: &SceneDescription,
         mesh: Mesh,
-        _reuse: &mut Reuse,
+        reuse: &mut Reuse,
         photons: &RunPhotons,
         progress: &Progress,
     ) -> Result<PassOne, MethodError> {
@@ -197,21 +239,33 @@ impl PassOneMethod for Adaptive {
         let mut kept: Option<PartialRows> = None;
         let mut record = Refinement::default();
         let mut level = 0;
+        let mut reused_form_factors = false;
         let solved = loop {
             let last = level == settings.levels;
             let with_photons = (last && specular).then_some(photons);
             let full = last || substructure;
+            // A batch keeps level 0's plain rows (they depend on geometry, not on Kd or Ke), so a
+            // materials-only job draws no patch hemicubes; rows made with the photons' paths are not kept.
+            let level_zero_key = (level == 0 && with_photons.is_none() && reuse.keeps())
+                .then(|| self.level_zero_key(scene, &current, full));
+            let cached = level_zero_key.and_then(|key| reuse.form_factors(key));
+            reused_form_factors |= cached.is_some();
+            let fresh = level_zero_key.filter(|_| cached.is_none());
             let solved = self.solve_level(
                 scene,
                 current,
                 &midpoints,
                 with_photons,
                 kept.as_ref(),
+                cached,
                 level,
                 full,
                 progress,
                 &mut stats,
             )?;
+            if let Some(key) = fresh {
+                reuse.keep_form_factors(key, solved.ff.clone());
+            }
             if last {
                 break solved;
             }
@@ -241,6 +295,7 @@ impl PassOneMethod for Adaptive {
                     &midpoints,
                     photons,
                     None,
+                    None,
                     level,
                     true,
                     progress,
@@ -257,6 +312,6 @@ impl PassOneMethod for Adaptive {
         stats.hemicubes_per_second = stats.elements as f64 / stats.form_factor_seconds.max(1e-9);
         // The file carries the refinement, so `render --solution` rebuilds this mesh (`refinement`).
         let solution = Solution { refinement: Some(Arc::new(record)), ..solved.solution };
-        Ok(PassOne { mesh: solved.mesh, solution, stats, reused_form_factors: false })
+        Ok(PassOne { mesh: solved.mesh, solution, stats, reused_form_factors })
     }
 }
