@@ -173,11 +173,12 @@ impl Default for AdaptiveSettings {
 
 /// Whether `method = "auto"` solves scenes that stay off the hierarchy, have no mirrors or glass,
 /// store their matrix and predict at most `AUTO_ADAPTIVE_CPU_SECONDS` of uniform hemicubes on the
-/// adaptive mesh instead of the uniform one, when the scene does not say (`auto_adaptive`). On since
-/// session 10: at default quality the adaptive mesh's radiosity-mode relMSE is 56–89% below the
-/// uniform mesh's at equal time on cornell_original, l_room, alcove_hall and gap_room, and it keeps
-/// every final image (docs/performance.md, "Adaptive mesh").
-pub const AUTO_PREFERS_ADAPTIVE: bool = true;
+/// adaptive mesh instead of the uniform one, when the scene does not say (`auto_adaptive`). Off: since
+/// the uniform mesh extrapolates its boundary vertices too (session 10), its final images are as good
+/// for less time — alcove_hall default final, seed 1, one window: uniform 0.000158 in 22.9 CPU-s,
+/// adaptive 0.000167 in 30.1 (the path tracer's half-time there is 22) — while the adaptive mesh
+/// still wins in radiosity mode (docs/performance.md, "Adaptive mesh made auto's choice").
+pub const AUTO_PREFERS_ADAPTIVE: bool = false;
 
 /// Predicted CPU seconds of the uniform matrix's hemicubes (`radiosity::matrix::cost`) above which
 /// `method = "auto"` keeps the uniform matrix rather than the adaptive mesh. The adaptive method keeps
