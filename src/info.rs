@@ -107,11 +107,17 @@ fn pass_one_method(scene: &SceneDescription) -> String {
     // `auto` meshes the scene and draws a sample of hemicubes: ask it once.
     let (name, why) = match scene.radiosity.method {
         MethodChoice::Auto => {
-            let (choice, reason) = method::auto_method(scene);
-            let name = match choice {
+            let name = |choice: MethodChoice| match choice {
                 MethodChoice::Hierarchical => hierarchical::Hierarchical.name(),
                 MethodChoice::Adaptive => Adaptive { solver: scene.radiosity.solver }.name(),
                 MethodChoice::Matrix | MethodChoice::Auto => method::for_params(&scene.radiosity).name(),
+            };
+            let [(choice, reason), (radiosity_choice, radiosity_reason)] = method::auto_methods(scene);
+            // Runs that draw only radiosity-mode images may take another mesh (`auto_method_for`).
+            let radiosity = if radiosity_choice != choice {
+                format!("; for radiosity-mode renders {} ({radiosity_reason})", name(radiosity_choice))
+            } else {
+                String::new()
             };
             // Shards cannot split the adaptive levels: say what they take instead (`shard_method`).
             let shards = match choice {
@@ -122,7 +128,7 @@ fn pass_one_method(scene: &SceneDescription) -> String {
                 ),
                 _ => String::new(),
             };
-            (name, format!(" (auto: {reason}){shards}"))
+            (name(choice), format!(" (auto: {reason}){radiosity}{shards}"))
         }
         _ => (method::for_scene(scene).name(), String::new()),
     };

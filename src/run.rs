@@ -30,7 +30,7 @@ use crate::radiosity::resume::{self, Checkpointer, Resume, ShardError};
 use crate::radiosity::solution_file::{self, SolutionFileError, SolutionMesh};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
-use crate::scene::{self, FinalGatherMode, MethodChoice, Overrides, SceneDescription, SceneError};
+use crate::scene::{self, FinalGatherMode, MethodChoice, Overrides, SceneDescription, SceneError, SolutionReader};
 use crate::trace::camera::PinholeCamera;
 use crate::trace::gather;
 use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
@@ -158,6 +158,22 @@ pub enum Work {
     Solve { output: PathBuf },
 }
 
+impl Work {
+    /// What the job's solution is read for (`method = "auto"` weighs it): radiosity-mode images only
+    /// when every planned image is one and no layered EXR is asked for; final images otherwise, and for
+    /// a solution file, which any later render may read.
+    pub fn solution_reader(&self) -> SolutionReader {
+        match self {
+            Work::Render { plan, layers: None, .. }
+                if !plan.is_empty() && plan.iter().all(|(mode, _)| *mode == TraceMode::Radiosity) =>
+            {
+                SolutionReader::RadiosityImages
+            }
+            _ => SolutionReader::FinalImages,
+        }
+    }
+}
+
 /// One job: a scene, the settings laid over it, and what to make.
 #[derive(Clone, Debug)]
 pub struct Job {
@@ -246,7 +262,8 @@ impl Runner {
             self.remove_checkpoint();
             return Ok(());
         }
-        let (mesh, solution) = self.pass_one(&scene, solution_file, &photons, progress, outcome)?;
+        let reader = job.work.solution_reader();
+        let (mesh, solution) = self.pass_one(&scene, solution_file, reader, &photons, progress, outcome)?;
         // Pass one is done: from here a signal ends the run at once (its checkpoint, if any, is kept);
         // one that came while a solution was loaded ends it here.
         let cancel = &self.reuse.resume.cancel;
@@ -281,11 +298,13 @@ impl Runner {
     }
 
     /// Pass one for a scene: the mesh and its solution, loaded from `solution_file`, reused from an
-    /// earlier job, black without emitters, or solved by the scene's method.
+    /// earlier job, black without emitters, or solved by the scene's method (for `method = "auto"`,
+    /// the one for a solution read for `reader`).
     pub fn pass_one(
         &mut self,
         scene: &SceneDescription,
         solution_file: Option<&Path>,
+        reader: SolutionReader,
         photons: &RunPhotons,
         progress: &Progress,
         outcome: &mut Outcome,
@@ -302,7 +321,7 @@ impl Runner {
                 ShardMethod::Hierarchy(hierarchy) => Box::new(hierarchy),
             }
         } else {
-            let (method, why) = method::for_scene_with_reason(scene);
+            let (method, why) = method::for_scene_with_reason(scene, reader);
             if let (Some(why), Verbosity::Verbose) = (why, progress.verbosity()) {
                 progress.note(&format!("pass one: {} (auto: {why})", method.name()));
             }
@@ -420,8 +439,8 @@ fn check_solution_fits(path: &Path, mesh: &Mesh, solution: &Solution) -> Result<
     Ok(())
 }
 
-/// Pass one of a single run (see `Runner::pass_one`), adding what it measured to `stats`; hand the
-/// same `photons` to `render`.
+/// Pass one of a single run (see `Runner::pass_one`) whose solution is read for final images (both
+/// modes may be drawn from it), adding what it measured to `stats`; hand the same `photons` to `render`.
 pub fn pass_one(
     scene: &SceneDescription,
     solution_file: Option<&Path>,
@@ -430,7 +449,8 @@ pub fn pass_one(
     stats: &mut RunStats,
 ) -> Result<(Mesh, Arc<Solution>), Failure> {
     let mut outcome = Outcome { stats: std::mem::take(stats), ..Default::default() };
-    let result = Runner::single().pass_one(scene, solution_file, photons, progress, &mut outcome);
+    let reader = SolutionReader::FinalImages;
+    let result = Runner::single().pass_one(scene, solution_file, reader, photons, progress, &mut outcome);
     *stats = outcome.stats;
     result
 }

@@ -251,16 +251,18 @@ fn auto_shards_and_merges_on_the_uniform_matrix_where_it_would_take_the_adaptive
 }
 
 #[test]
-fn auto_picks_the_adaptive_mesh_only_when_auto_adaptive_says_so_and_never_through_mirrors_or_glass() {
+fn auto_picks_the_adaptive_mesh_for_final_images_only_when_auto_adaptive_says_so_and_never_through_mirrors_or_glass() {
     use radray::radiosity::method::{auto_method, for_scene};
     use radray::scene::{MethodChoice, AUTO_PREFERS_ADAPTIVE};
     let load = |name: &str| radray::scene::load(&scene_path(name)).unwrap();
     let mut cornell = load("cornell_box.toml");
     assert_eq!(cornell.radiosity.method, MethodChoice::Auto);
-    assert_eq!(cornell.radiosity.adaptive.auto, AUTO_PREFERS_ADAPTIVE);
-    cornell.radiosity.adaptive.auto = false;
+    assert_eq!(cornell.radiosity.adaptive.auto, None, "the shipped scene does not say");
+    let expected = if AUTO_PREFERS_ADAPTIVE { MethodChoice::Adaptive } else { MethodChoice::Matrix };
+    assert_eq!(auto_method(&cornell).0, expected);
+    cornell.radiosity.adaptive.auto = Some(false);
     assert_eq!(auto_method(&cornell).0, MethodChoice::Matrix);
-    cornell.radiosity.adaptive.auto = true;
+    cornell.radiosity.adaptive.auto = Some(true);
     let (choice, reason) = auto_method(&cornell);
     assert_eq!(choice, MethodChoice::Adaptive, "{reason}");
     assert!(for_scene(&cornell).name().starts_with("adaptive"), "{}", for_scene(&cornell).name());
@@ -275,8 +277,89 @@ fn auto_picks_the_adaptive_mesh_only_when_auto_adaptive_says_so_and_never_throug
     cornell.radiosity.store_form_factors = false;
     assert_eq!(auto_method(&cornell).0, MethodChoice::Matrix);
     let mut specular = load("cornell_specular.toml");
-    specular.radiosity.adaptive.auto = true;
+    specular.radiosity.adaptive.auto = Some(true);
     assert_eq!(auto_method(&specular).0, MethodChoice::Matrix, "mirrors and glass stay on the uniform matrix");
+}
+
+#[test]
+fn auto_takes_the_adaptive_mesh_for_radiosity_mode_images_unless_auto_adaptive_says_otherwise() {
+    use radray::radiosity::method::auto_method_for;
+    use radray::scene::{MethodChoice, SolutionReader, AUTO_PREFERS_ADAPTIVE_FOR_RADIOSITY_IMAGES};
+    let load = |name: &str| radray::scene::load(&scene_path(name)).unwrap();
+    let (radiosity, final_images) = (SolutionReader::RadiosityImages, SolutionReader::FinalImages);
+    let mut cornell = load("cornell_box.toml");
+    const { assert!(AUTO_PREFERS_ADAPTIVE_FOR_RADIOSITY_IMAGES) };
+    let (choice, reason) = auto_method_for(&cornell, radiosity);
+    assert_eq!(choice, MethodChoice::Adaptive, "{reason}");
+    assert!(reason.contains("only radiosity-mode images"), "{reason}");
+    assert_eq!(auto_method_for(&cornell, final_images).0, MethodChoice::Matrix);
+    // The explicit key wins for every reader.
+    cornell.radiosity.adaptive.auto = Some(false);
+    let (choice, reason) = auto_method_for(&cornell, radiosity);
+    assert_eq!(choice, MethodChoice::Matrix, "{reason}");
+    assert!(reason.contains("auto_adaptive is off"), "{reason}");
+    cornell.radiosity.adaptive.auto = Some(true);
+    assert_eq!(auto_method_for(&cornell, final_images).0, MethodChoice::Adaptive);
+    // An explicit method is not auto's to change.
+    cornell.radiosity.adaptive.auto = None;
+    cornell.radiosity.method = MethodChoice::Matrix;
+    let method = radray::radiosity::method::for_scene_with_reason(&cornell, radiosity).0;
+    assert_eq!(method.name(), "gauss-seidel");
+    // Mirrors and glass stay on the uniform matrix in radiosity mode too.
+    let specular = load("cornell_specular.toml");
+    assert_eq!(auto_method_for(&specular, radiosity).0, MethodChoice::Matrix);
+}
+
+#[test]
+fn only_runs_that_draw_nothing_but_radiosity_images_read_their_solution_for_radiosity_images() {
+    use radray::run::{PngSettings, Work};
+    use radray::scene::SolutionReader;
+    use radray::trace::whitted::TraceMode;
+    let render = |modes: &[TraceMode], layers: Option<PathBuf>| Work::Render {
+        plan: modes.iter().map(|&m| (m, PathBuf::from("x.exr"))).collect(),
+        png: PngSettings::default(),
+        solution: None,
+        layers,
+    };
+    assert_eq!(render(&[TraceMode::Radiosity], None).solution_reader(), SolutionReader::RadiosityImages);
+    let two = [TraceMode::Radiosity, TraceMode::Radiosity];
+    assert_eq!(render(&two, None).solution_reader(), SolutionReader::RadiosityImages, "two -o files");
+    assert_eq!(render(&[TraceMode::Final], None).solution_reader(), SolutionReader::FinalImages);
+    let both = [TraceMode::Final, TraceMode::Radiosity];
+    assert_eq!(render(&both, None).solution_reader(), SolutionReader::FinalImages, "--mode both");
+    let layers = Some(PathBuf::from("l.exr"));
+    assert_eq!(render(&[TraceMode::Radiosity], layers).solution_reader(), SolutionReader::FinalImages, "--layers");
+    let solve = Work::Solve { output: PathBuf::from("s.radsol") };
+    assert_eq!(solve.solution_reader(), SolutionReader::FinalImages, "a solution file serves any later render");
+}
+
+#[test]
+fn a_radiosity_mode_render_under_auto_is_the_adaptive_one_and_auto_adaptive_false_keeps_the_matrix() {
+    let dir = tempfile::tempdir().unwrap();
+    let cornell = scene_path("cornell_box.toml");
+    let cornell = cornell.to_str().unwrap();
+    let out = |name: &str| dir.path().join(name);
+    let read = |name: &str| std::fs::read(dir.path().join(name)).unwrap();
+    let radiosity = ["--mode", "radiosity"];
+    let run = |scene: &str, name: &str, args: &[&str]| {
+        let o = render(scene, &out(name), &[&radiosity[..], args].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        o
+    };
+    let o = run(cornell, "auto.exr", &["-v"]);
+    assert!(stderr(&o).contains("pass one: adaptive"), "{}", stderr(&o));
+    run(cornell, "adaptive.exr", &["--method", "adaptive"]);
+    run(cornell, "matrix.exr", &["--method", "matrix"]);
+    assert_eq!(read("auto.exr"), read("adaptive.exr"));
+    assert_ne!(read("auto.exr"), read("matrix.exr"));
+    // The scene's auto_adaptive = false wins over the mode.
+    let text = std::fs::read_to_string(cornell).unwrap();
+    let text = text.replacen("[radiosity]\n", "[radiosity]\nauto_adaptive = false\n", 1);
+    let text = text.replace("obj = \"", &format!("obj = \"{}/", scene_path("").display()));
+    let off = out("off.toml");
+    std::fs::write(&off, text).unwrap();
+    run(off.to_str().unwrap(), "off.exr", &[]);
+    assert_eq!(read("off.exr"), read("matrix.exr"));
 }
 
 #[test]

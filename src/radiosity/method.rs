@@ -23,8 +23,8 @@ use crate::cache::Lru;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::scene::{
-    MethodChoice, RadiosityParams, SceneDescription, SolverKind, AUTO_ADAPTIVE_CPU_SECONDS, AUTO_MATRIX_CPU_SECONDS,
-    AUTO_MATRIX_CPU_SECONDS_SPECULAR,
+    MethodChoice, RadiosityParams, SceneDescription, SolutionReader, SolverKind, AUTO_ADAPTIVE_CPU_SECONDS,
+    AUTO_MATRIX_CPU_SECONDS, AUTO_MATRIX_CPU_SECONDS_SPECULAR,
 };
 use crate::transport::photons::RunPhotons;
 
@@ -187,16 +187,20 @@ pub fn for_params(params: &RadiosityParams) -> Box<dyn PassOneMethod> {
 }
 
 /// The scene's method (`[radiosity] method`): `matrix` is `for_params`; `hierarchical` is
-/// `Hierarchical`; `adaptive` is `Adaptive`; `auto` is what `auto_method` picks.
+/// `Hierarchical`; `adaptive` is `Adaptive`; `auto` is what `auto_method` picks (for final images).
 pub fn for_scene(scene: &SceneDescription) -> Box<dyn PassOneMethod> {
-    for_scene_with_reason(scene).0
+    for_scene_with_reason(scene, SolutionReader::FinalImages).0
 }
 
-/// `for_scene`, with `auto_method`'s reason when the scene says `method = "auto"`.
-pub fn for_scene_with_reason(scene: &SceneDescription) -> (Box<dyn PassOneMethod>, Option<String>) {
+/// The scene's method for a solution read for `reader` (`auto_method_for`), with `auto`'s reason
+/// when the scene says `method = "auto"`.
+pub fn for_scene_with_reason(
+    scene: &SceneDescription,
+    reader: SolutionReader,
+) -> (Box<dyn PassOneMethod>, Option<String>) {
     let (choice, why) = match scene.radiosity.method {
         MethodChoice::Auto => {
-            let (choice, why) = auto_method(scene);
+            let (choice, why) = auto_method_for(scene, reader);
             (choice, Some(why))
         }
         chosen => (chosen, None),
@@ -209,20 +213,40 @@ pub fn for_scene_with_reason(scene: &SceneDescription) -> (Box<dyn PassOneMethod
     (method, why)
 }
 
-/// What `method = "auto"` picks for `scene`, and why: the hierarchy when `auto_prefers_hierarchy`
-/// says the uniform mesh is out of reach, else the adaptive mesh when `auto_prefers_adaptive` says
-/// so, else the uniform mesh's matrix (`MethodChoice::Matrix`: `for_params`).
+/// What `method = "auto"` picks for `scene` when its solution is read for final images or saved
+/// (`auto_method_for` with `SolutionReader::FinalImages`), and why.
 pub fn auto_method(scene: &SceneDescription) -> (MethodChoice, String) {
-    match uniform_outlook(scene) {
-        Err(reason) => (MethodChoice::Hierarchical, reason),
-        Ok(outlook) => match adaptive_choice(&scene.radiosity, outlook.as_ref()) {
-            Ok(reason) => (MethodChoice::Adaptive, reason),
-            Err(why_not) => (MethodChoice::Matrix, format!("the uniform mesh fits; {why_not}")),
-        },
+    auto_method_for(scene, SolutionReader::FinalImages)
+}
+
+/// What `method = "auto"` picks for `scene` whose solution is read for `reader`, and why: the
+/// hierarchy when `auto_prefers_hierarchy` says the uniform mesh is out of reach, else the adaptive
+/// mesh when `adaptive_choice` says so (by default only for radiosity-mode images:
+/// `AdaptiveSettings::auto_for`), else the uniform mesh's matrix (`MethodChoice::Matrix`:
+/// `for_params`).
+pub fn auto_method_for(scene: &SceneDescription, reader: SolutionReader) -> (MethodChoice, String) {
+    let [final_images, radiosity_images] = auto_methods(scene);
+    match reader {
+        SolutionReader::FinalImages => final_images,
+        SolutionReader::RadiosityImages => radiosity_images,
     }
 }
 
-/// What `method = "auto"` picks under `--shard` or `--merge`, and why: `auto_method`'s choice, except
+/// `auto_method_for` for final images and for radiosity images, in that order, from one look at the
+/// uniform mesh (it meshes the scene and draws a sample of hemicubes; `radray info` shows both).
+pub fn auto_methods(scene: &SceneDescription) -> [(MethodChoice, String); 2] {
+    let outlook = uniform_outlook(scene);
+    [SolutionReader::FinalImages, SolutionReader::RadiosityImages].map(|reader| match &outlook {
+        Err(reason) => (MethodChoice::Hierarchical, reason.clone()),
+        Ok(outlook) => match adaptive_choice(&scene.radiosity, outlook.as_ref(), reader) {
+            Ok(reason) => (MethodChoice::Adaptive, reason),
+            Err(why_not) => (MethodChoice::Matrix, format!("the uniform mesh fits; {why_not}")),
+        },
+    })
+}
+
+/// What `method = "auto"` picks under `--shard` or `--merge` (which make solution files, read for final
+/// images: `auto_method`), and why: `auto_method`'s choice, except
 /// that the adaptive mesh falls back to the uniform matrix (its levels each need the whole solve of
 /// the level before, so they cannot be sharded), with the reason saying so.
 pub fn auto_method_for_shards(scene: &SceneDescription) -> (MethodChoice, String) {
@@ -282,15 +306,32 @@ fn uniform_outlook(scene: &SceneDescription) -> Result<Option<UniformOutlook>, S
     Ok(Some(UniformOutlook { cpu_seconds: estimate.cpu_seconds, specular }))
 }
 
-/// `Ok(why)` when `auto` takes the adaptive mesh for a scene whose uniform matrix fits (`outlook`),
-/// else `Err(why not)`: only when `auto_adaptive` is on (`AUTO_PREFERS_ADAPTIVE` unless the scene
-/// says), the matrix is stored (`store_form_factors`), the uniform mesh has no mirrors or glass (the
-/// adaptive levels before the last are solved without extended form factors, so their splits miss
-/// light through them), and its hemicubes are predicted at most `AUTO_ADAPTIVE_CPU_SECONDS` (the
-/// adaptive method keeps no checkpoint, so it takes only scenes that solve in well under a minute).
-fn adaptive_choice(params: &RadiosityParams, outlook: Option<&UniformOutlook>) -> Result<String, String> {
-    if !params.adaptive.auto {
-        return Err("auto_adaptive is off".to_string());
+/// `Ok(why)` when `auto` takes the adaptive mesh for a scene whose uniform matrix fits (`outlook`)
+/// and whose solution is read for `reader`, else `Err(why not)`: only when `auto_adaptive` is on for
+/// that reader (`AdaptiveSettings::auto_for`: the scene's key, else on for radiosity-mode images and
+/// off for final images and solution files), the matrix is stored (`store_form_factors`), the uniform
+/// mesh has no mirrors or glass (the adaptive levels before the last are solved without extended form
+/// factors, so their splits miss light through them), and its hemicubes are predicted at most
+/// `AUTO_ADAPTIVE_CPU_SECONDS` (the adaptive method keeps no checkpoint, so it takes only scenes that
+/// solve in well under a minute).
+fn adaptive_choice(
+    params: &RadiosityParams,
+    outlook: Option<&UniformOutlook>,
+    reader: SolutionReader,
+) -> Result<String, String> {
+    let why_on = match (params.adaptive.auto, reader) {
+        (Some(_), _) => "auto_adaptive is on",
+        (None, SolutionReader::FinalImages) => "the solution is read for final images or saved",
+        (None, SolutionReader::RadiosityImages) => "only radiosity-mode images read the solution",
+    };
+    let on = params.adaptive.auto_for(reader);
+    if !on {
+        return Err(match params.adaptive.auto {
+            Some(_) => "auto_adaptive is off".to_string(),
+            None => "final images and solution files keep the uniform matrix (as good a final image for less \
+                     time; auto_adaptive = true opts in)"
+                .to_string(),
+        });
     }
     let Some(outlook) = outlook else {
         return Err("store_form_factors = false asks for matrix-free shooting".to_string());
@@ -307,15 +348,16 @@ fn adaptive_choice(params: &RadiosityParams, outlook: Option<&UniformOutlook>) -
     }
     Ok(format!(
         "the uniform mesh fits (about {:.0} CPU-s of hemicubes, at most {AUTO_ADAPTIVE_CPU_SECONDS}), no mirrors or \
-         glass, and auto_adaptive is on",
+         glass, and {why_on}",
         outlook.cpu_seconds
     ))
 }
 
-/// Why `method = "auto"` takes the adaptive mesh for a scene the uniform matrix can take
-/// (`adaptive_choice`), or `None` when it keeps the uniform mesh or leaves it for the hierarchy.
-pub fn auto_prefers_adaptive(scene: &SceneDescription) -> Option<String> {
-    match auto_method(scene) {
+/// Why `method = "auto"` takes the adaptive mesh for a scene the uniform matrix can take, whose
+/// solution is read for `reader` (`adaptive_choice`), or `None` when it keeps the uniform mesh or
+/// leaves it for the hierarchy.
+pub fn auto_prefers_adaptive(scene: &SceneDescription, reader: SolutionReader) -> Option<String> {
+    match auto_method_for(scene, reader) {
         (MethodChoice::Adaptive, reason) => Some(reason),
         _ => None,
     }

@@ -161,24 +161,56 @@ pub struct AdaptiveSettings {
     /// own exitance, or of a floor relative to the brightest reflected exitance (`adaptive_threshold`).
     pub threshold: f64,
     /// Whether `method = "auto"` picks the adaptive mesh for scenes the matrix can take
-    /// (`auto_adaptive`, default `AUTO_PREFERS_ADAPTIVE`; `radiosity::method::auto_prefers_adaptive`).
-    pub auto: bool,
+    /// (`auto_adaptive`); `None` when the scene does not say: then it depends on what the solution is
+    /// read for (`auto_for`; `radiosity::method::auto_method_for`).
+    pub auto: Option<bool>,
 }
 
 impl Default for AdaptiveSettings {
     fn default() -> Self {
-        AdaptiveSettings { levels: 1, threshold: 0.1, auto: AUTO_PREFERS_ADAPTIVE }
+        AdaptiveSettings { levels: 1, threshold: 0.1, auto: None }
     }
+}
+
+impl AdaptiveSettings {
+    /// Whether `method = "auto"` prefers the adaptive mesh for a solution read for `reader`: the
+    /// scene's `auto_adaptive` when it says, else `AUTO_PREFERS_ADAPTIVE` for final images and solution
+    /// files and `AUTO_PREFERS_ADAPTIVE_FOR_RADIOSITY_IMAGES` for radiosity-mode images.
+    pub fn auto_for(&self, reader: SolutionReader) -> bool {
+        self.auto.unwrap_or(match reader {
+            SolutionReader::FinalImages => AUTO_PREFERS_ADAPTIVE,
+            SolutionReader::RadiosityImages => AUTO_PREFERS_ADAPTIVE_FOR_RADIOSITY_IMAGES,
+        })
+    }
+}
+
+/// What a run's pass-one solution will be read for, which `method = "auto"` weighs when the scene does
+/// not set `auto_adaptive` (`AdaptiveSettings::auto_for`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SolutionReader {
+    /// Final images (also `--mode both` and `--layers`), or a solution file (`radray solve`) that any
+    /// later render may read: the final image reads the solution through its final gather and takes
+    /// direct light per pixel, so a finer mesh buys it little.
+    #[default]
+    FinalImages,
+    /// Only radiosity-mode images (`render --mode radiosity`, a batch job with `mode = "radiosity"`):
+    /// each pixel is the interpolated solution itself, so its mesh is the image's error.
+    RadiosityImages,
 }
 
 /// Whether `method = "auto"` solves scenes that stay off the hierarchy, have no mirrors or glass,
 /// store their matrix and predict at most `AUTO_ADAPTIVE_CPU_SECONDS` of uniform hemicubes on the
-/// adaptive mesh instead of the uniform one, when the scene does not say (`auto_adaptive`). Off: since
-/// the uniform mesh extrapolates its boundary vertices too (session 10), its final images are as good
-/// for less time — alcove_hall default final, seed 1, one window: uniform 0.000158 in 22.9 CPU-s,
-/// adaptive 0.000167 in 30.1 (the path tracer's half-time there is 22) — while the adaptive mesh
-/// still wins in radiosity mode (docs/performance.md, "Adaptive mesh made auto's choice").
+/// adaptive mesh instead of the uniform one, for final images and solution files, when the scene does
+/// not say (`auto_adaptive`). Off: since the uniform mesh extrapolates its boundary vertices too
+/// (session 10), its final images are as good for less time — alcove_hall default final, seed 1, one
+/// window: uniform 0.000158 in 22.9 CPU-s, adaptive 0.000167 in 30.1 (the path tracer's half-time
+/// there is 22) (docs/performance.md, "Adaptive mesh made auto's choice").
 pub const AUTO_PREFERS_ADAPTIVE: bool = false;
+
+/// `AUTO_PREFERS_ADAPTIVE` for runs that draw only radiosity-mode images. On: there the adaptive mesh
+/// beats a finer uniform mesh of the same CPU time by 35–50% on the rooms that are not boxes
+/// (docs/performance.md, "Adaptive mesh against the uniform mesh at equal time").
+pub const AUTO_PREFERS_ADAPTIVE_FOR_RADIOSITY_IMAGES: bool = true;
 
 /// Predicted CPU seconds of the uniform matrix's hemicubes (`radiosity::matrix::cost`) above which
 /// `method = "auto"` keeps the uniform matrix rather than the adaptive mesh. The adaptive method keeps
@@ -194,9 +226,10 @@ pub enum MethodChoice {
     /// The full matrix (or matrix-free shooting with `store_form_factors = false`) when its predicted
     /// matrix fits the memory budget and its predicted hemicube CPU time is under
     /// `AUTO_MATRIX_CPU_SECONDS`; the hierarchy otherwise (`radiosity::method::auto_prefers_hierarchy`).
-    /// With `auto_adaptive` (`AUTO_PREFERS_ADAPTIVE`) the matrix's small diffuse scenes
-    /// (`AUTO_ADAPTIVE_CPU_SECONDS`) go to the adaptive mesh (`radiosity::method::auto_method`), except
-    /// under `--shard`/`--merge` (`radiosity::method::shard_method`).
+    /// For runs that draw only radiosity-mode images, or with `auto_adaptive = true`
+    /// (`AdaptiveSettings::auto_for`), the matrix's small diffuse scenes (`AUTO_ADAPTIVE_CPU_SECONDS`)
+    /// go to the adaptive mesh (`radiosity::method::auto_method_for`), except under
+    /// `--shard`/`--merge` (`radiosity::method::shard_method`).
     #[default]
     Auto,
     /// The uniform mesh and the full matrix (or matrix-free shooting), whatever the scene's size.

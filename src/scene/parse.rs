@@ -572,7 +572,7 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
         a.threshold = t;
     }
     if let Some(b) = r.auto_adaptive {
-        a.auto = b;
+        a.auto = Some(b);
     }
     Ok(())
 }
