@@ -714,7 +714,8 @@ fn leaf_mesh_of(
 ) -> hierarchy::interpolate::LeafMesh {
     let scene = scene_of(vec![(vertices, 0.5, 0.0)]);
     let (mut nodes, root, inputs, _) = clusters::build(&scene).unwrap();
-    let leaves = |nodes: &Nodes| (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect::<Vec<_>>();
+    let leaves =
+        |nodes: &Nodes| (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect::<Vec<_>>();
     for _ in 0..levels {
         for n in leaves(&nodes) {
             nodes.subdivide(n);
