@@ -4,22 +4,87 @@
 //! direct light falls to zero at the wall) the boundary row of the image is too bright or too dark by
 //! half an element's change. The extrapolation is exact for a linear solution (Cohen and Wallace,
 //! *Radiosity and Realistic Image Synthesis*, 1993, §9.2: nodal values at boundaries by extrapolation).
-//! `vertex_values` is the one vertex-interpolation step of the element meshes (uniform and adaptive).
+//! `vertex_values` is the one vertex-interpolation step of the element meshes: the uniform and adaptive
+//! `Mesh`, and the hierarchy's leaf mesh (`hierarchy::interpolate::LeafMesh`), each through
+//! `ElementMesh`.
 
 use glam::{DMat3, DVec3, Vec3};
 
 use crate::mesh::{Mesh, NONE};
 
+/// What the vertex step reads of an element mesh: shared vertices, and per element its corners,
+/// plane, weight and surface side.
+pub trait ElementMesh {
+    /// Vertex positions (shared by the elements of one surface side).
+    fn positions(&self) -> &[Vec3];
+    fn element_count(&self) -> usize;
+    /// Element e's corners (indices into `positions`), counter-clockwise, `NONE` past the last.
+    fn corners(&self, e: usize) -> [u32; 4];
+    /// Element e's centroid: where its value is taken to hold.
+    fn centre(&self, e: usize) -> Vec3;
+    /// Element e's unit normal.
+    fn normal(&self, e: usize) -> Vec3;
+    /// Element e's weight in a vertex's mean and extrapolation: its area (m²), or the part of it light
+    /// can reach.
+    fn weight(&self, e: usize) -> f64;
+    /// The surface side element e lies on: a fit reads only neighbours on the same side.
+    fn surface(&self, e: usize) -> u32;
+    /// Element e is never seen (buried under the back of a one-sided surface, or inside an object
+    /// resting on it): its value is not the surface's light, so it stays out of fits and limits.
+    fn buried(&self, e: usize) -> bool;
+    /// Interior vertex values: the `weight`-weighted mean of the unburied elements around each vertex
+    /// (Gouraud), the mean of the buried ones where there are only those.
+    fn vertex_mean(&self, element_values: &[DVec3]) -> Vec<DVec3>;
+}
+
+impl ElementMesh for Mesh {
+    fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    fn element_count(&self) -> usize {
+        self.elements.len()
+    }
+
+    fn corners(&self, e: usize) -> [u32; 4] {
+        self.elements.corners[e]
+    }
+
+    fn centre(&self, e: usize) -> Vec3 {
+        self.elements.centre[e]
+    }
+
+    fn normal(&self, e: usize) -> Vec3 {
+        self.elements.normal[e]
+    }
+
+    fn weight(&self, e: usize) -> f64 {
+        self.elements.area[e] as f64
+    }
+
+    fn surface(&self, e: usize) -> u32 {
+        self.elements.surface[e]
+    }
+
+    fn buried(&self, e: usize) -> bool {
+        self.element_buried.get(e).copied().unwrap_or(false)
+    }
+
+    fn vertex_mean(&self, element_values: &[DVec3]) -> Vec<DVec3> {
+        self.vertex_average(element_values)
+    }
+}
+
 /// Per vertex: it lies on the boundary of its surface side. An element edge is a boundary edge when no
 /// other element of the mesh uses it. Edges are first cut at their split midpoints (`midpoint(a, b)`,
 /// recursively; `|_, _| None` on a mesh without T-vertices), so that an unsplit element's edge and its
 /// split neighbour's two half edges count as one shared edge.
-pub fn boundary_vertices(mesh: &Mesh, midpoint: &dyn Fn(u32, u32) -> Option<u32>) -> Vec<bool> {
+pub fn boundary_vertices<M: ElementMesh + ?Sized>(mesh: &M, midpoint: &dyn Fn(u32, u32) -> Option<u32>) -> Vec<bool> {
     let mut uses: rustc_hash::FxHashMap<(u32, u32), u32> = Default::default();
     let mut stack = Vec::new();
-    for e in 0..mesh.elements.len() {
-        let c = mesh.elements.corners[e];
-        let n = mesh.elements.corner_count(e);
+    for e in 0..mesh.element_count() {
+        let c = mesh.corners(e);
+        let n = c.iter().take_while(|&&v| v != NONE).count();
         for k in 0..n {
             stack.push((c[k], c[(k + 1) % n]));
             while let Some((a, b)) = stack.pop() {
@@ -33,7 +98,7 @@ pub fn boundary_vertices(mesh: &Mesh, midpoint: &dyn Fn(u32, u32) -> Option<u32>
             }
         }
     }
-    let mut boundary = vec![false; mesh.positions.len()];
+    let mut boundary = vec![false; mesh.positions().len()];
     for ((a, b), count) in uses {
         if count == 1 {
             boundary[a as usize] = true;
@@ -45,61 +110,87 @@ pub fn boundary_vertices(mesh: &Mesh, midpoint: &dyn Fn(u32, u32) -> Option<u32>
 
 /// The boundary vertices of a mesh without T-vertices (the uniform mesh: one shared-vertex grid per
 /// surface side, `Mesh::build`): `boundary_vertices` with no split edges.
-pub fn conforming_boundary(mesh: &Mesh) -> Vec<bool> {
+pub fn conforming_boundary<M: ElementMesh + ?Sized>(mesh: &M) -> Vec<bool> {
     boundary_vertices(mesh, &|_, _| None)
 }
 
-/// Per-vertex values of per-element values B_e, as pass two interpolates them: the area-weighted
-/// mean over the unburied elements around a vertex (`Mesh::vertex_average`, Gouraud) inside each
-/// surface side, and the clamped linear extrapolation of `extrapolate` at the vertices marked
-/// `boundary`. Every pass-one method on element meshes (matrix, matrix-free, adaptive) makes its
+/// Per-vertex values of per-element values B_e, as pass two interpolates them: the weighted mean over
+/// the unburied elements around a vertex (`ElementMesh::vertex_mean`, Gouraud) inside each surface
+/// side, and the clamped linear extrapolation of `extrapolate` at the vertices marked `boundary`.
+/// Every pass-one method on element meshes (matrix, matrix-free, adaptive, hierarchical) makes its
 /// vertex values here.
-pub fn vertex_values(mesh: &Mesh, element_values: &[DVec3], boundary: &[bool]) -> Vec<Vec3> {
-    let mut vertex: Vec<Vec3> = mesh.vertex_average(element_values).iter().map(|v| v.as_vec3()).collect();
+pub fn vertex_values<M: ElementMesh + ?Sized>(mesh: &M, element_values: &[DVec3], boundary: &[bool]) -> Vec<Vec3> {
+    let mut vertex: Vec<Vec3> = mesh.vertex_mean(element_values).iter().map(|v| v.as_vec3()).collect();
     let element: Vec<Vec3> = element_values.iter().map(|v| v.as_vec3()).collect();
     extrapolate(mesh, &element, boundary, &mut vertex);
     vertex
 }
 
-/// For each element, the elements of the same mesh surface that share a vertex with it (itself and
-/// buried elements excluded: they are never seen and their values are not the surface's light), in
-/// increasing order.
-fn vertex_neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
-    let buried = |e: usize| mesh.element_buried.get(e).copied().unwrap_or(false);
-    let mut at_vertex = vec![Vec::new(); mesh.positions.len()];
-    for (e, corners) in mesh.elements.corners.iter().enumerate() {
-        for &v in corners.iter().filter(|&&v| v != NONE) {
-            at_vertex[v as usize].push(e as u32);
+/// The elements at each vertex, in increasing order, as one flat list: vertex v's are
+/// `elements[start[v]..start[v + 1]]`.
+struct ElementsAtVertex {
+    start: Vec<u32>,
+    elements: Vec<u32>,
+}
+
+impl ElementsAtVertex {
+    fn new<M: ElementMesh + ?Sized>(mesh: &M) -> Self {
+        let mut start = vec![0u32; mesh.positions().len() + 1];
+        for e in 0..mesh.element_count() {
+            for v in mesh.corners(e).into_iter().filter(|&v| v != NONE) {
+                start[v as usize + 1] += 1;
+            }
         }
+        for v in 0..mesh.positions().len() {
+            start[v + 1] += start[v];
+        }
+        let mut next = start.clone();
+        let mut elements = vec![0u32; start[mesh.positions().len()] as usize];
+        for e in 0..mesh.element_count() {
+            for v in mesh.corners(e).into_iter().filter(|&v| v != NONE) {
+                elements[next[v as usize] as usize] = e as u32;
+                next[v as usize] += 1;
+            }
+        }
+        ElementsAtVertex { start, elements }
     }
-    (0..mesh.elements.len())
-        .map(|e| {
-            let surface = mesh.elements.surface[e];
-            let mut around: Vec<u32> = mesh.elements.corners[e]
-                .iter()
-                .filter(|&&v| v != NONE)
-                .flat_map(|&v| at_vertex[v as usize].iter().copied())
-                .filter(|&n| n as usize != e && mesh.elements.surface[n as usize] == surface && !buried(n as usize))
-                .collect();
-            around.sort_unstable();
-            around.dedup();
-            around
-        })
-        .collect()
+
+    /// The elements of element e's surface side that share a vertex with it (itself and buried
+    /// elements excluded: they are never seen and their values are not the surface's light), in
+    /// increasing order.
+    fn neighbours<M: ElementMesh + ?Sized>(&self, mesh: &M, e: usize) -> Vec<u32> {
+        let surface = mesh.surface(e);
+        let mut around: Vec<u32> = mesh
+            .corners(e)
+            .into_iter()
+            .filter(|&v| v != NONE)
+            .flat_map(|v| self.elements[self.start[v as usize] as usize..self.start[v as usize + 1] as usize].iter())
+            .copied()
+            .filter(|&n| n as usize != e && mesh.surface(n as usize) == surface && !mesh.buried(n as usize))
+            .collect();
+        around.sort_unstable();
+        around.dedup();
+        around
+    }
 }
 
 /// The linear reconstruction of element e's neighbourhood: the in-plane gradient g (one per channel,
 /// as the columns of a matrix) minimising Σₙ (Bₙ − Bₑ − g·(cₙ − cₑ))² over the neighbours n (centres
 /// cₙ), with no component along the normal; and the range [lo, hi] of B over e and its neighbours.
 /// `None` when the neighbours do not span the plane (fewer than two directions).
-fn linear_fit(mesh: &Mesh, values: &[Vec3], e: usize, around: &[u32]) -> Option<(DMat3, DVec3, DVec3)> {
-    let centre = mesh.elements.centre[e].as_dvec3();
-    let normal = mesh.elements.normal[e].as_dvec3();
+fn linear_fit<M: ElementMesh + ?Sized>(
+    mesh: &M,
+    values: &[Vec3],
+    e: usize,
+    around: &[u32],
+) -> Option<(DMat3, DVec3, DVec3)> {
+    let centre = mesh.centre(e).as_dvec3();
+    let normal = mesh.normal(e).as_dvec3();
     let own = values[e].as_dvec3();
     let (mut m, mut r) = (DMat3::ZERO, DMat3::ZERO);
     let (mut lo, mut hi) = (own, own);
     for &n in around {
-        let d = mesh.elements.centre[n as usize].as_dvec3() - centre;
+        let d = mesh.centre(n as usize).as_dvec3() - centre;
         let d = d - normal * d.dot(normal);
         let b = values[n as usize].as_dvec3();
         lo = lo.min(b);
@@ -119,37 +210,42 @@ fn linear_fit(mesh: &Mesh, values: &[Vec3], e: usize, around: &[u32]) -> Option<
     Some((m.inverse() * r, lo, hi))
 }
 
-/// Replaces the value of every boundary vertex (`boundary`) by the area-weighted mean, over its
+/// Replaces the value of every boundary vertex (`boundary`) by the weighted (`ElementMesh::weight`) mean, over its
 /// elements e that are not buried, of e's linear extrapolation
 ///   B_v = Bₑ + gₑ·(p_v − cₑ),  limited to [lo − (hi − lo)/2, hi + (hi − lo)/2] and to B ≥ 0,
 /// with gₑ, lo and hi from `linear_fit`. The limit allows exactly the half-element overshoot of a
 /// linear solution beyond its neighbours' range and stops a shadow boundary's step from being
 /// extrapolated into a spike. Elements whose neighbours do not span their plane give their own value.
 /// Interior vertices keep their value.
-pub fn extrapolate(mesh: &Mesh, element_values: &[Vec3], boundary: &[bool], vertex_values: &mut [Vec3]) {
-    assert_eq!(element_values.len(), mesh.elements.len());
-    assert_eq!(vertex_values.len(), mesh.positions.len());
+pub fn extrapolate<M: ElementMesh + ?Sized>(
+    mesh: &M,
+    element_values: &[Vec3],
+    boundary: &[bool],
+    vertex_values: &mut [Vec3],
+) {
+    assert_eq!(element_values.len(), mesh.element_count());
+    assert_eq!(vertex_values.len(), mesh.positions().len());
     if !boundary.iter().any(|&b| b) {
         return;
     }
-    let neighbours = vertex_neighbours(mesh);
-    let mut sum = vec![DVec3::ZERO; mesh.positions.len()];
-    let mut weight = vec![0.0f64; mesh.positions.len()];
-    for e in 0..mesh.elements.len() {
-        if mesh.element_buried.get(e).copied().unwrap_or(false) {
+    let at_vertex = ElementsAtVertex::new(mesh);
+    let mut sum = vec![DVec3::ZERO; mesh.positions().len()];
+    let mut weight = vec![0.0f64; mesh.positions().len()];
+    for e in 0..mesh.element_count() {
+        if mesh.buried(e) {
             continue;
         }
-        let corners = mesh.elements.corners[e];
+        let corners = mesh.corners(e);
         if !corners.iter().any(|&v| v != NONE && boundary[v as usize]) {
             continue;
         }
-        let fit = linear_fit(mesh, element_values, e, &neighbours[e]);
+        let fit = linear_fit(mesh, element_values, e, &at_vertex.neighbours(mesh, e));
         let own = element_values[e].as_dvec3();
-        let area = mesh.elements.area[e] as f64;
+        let area = mesh.weight(e);
         for &v in corners.iter().filter(|&&v| v != NONE && boundary[v as usize]) {
             let value = match fit {
                 Some((gradient, lo, hi)) => {
-                    let d = mesh.positions[v as usize].as_dvec3() - mesh.elements.centre[e].as_dvec3();
+                    let d = mesh.positions()[v as usize].as_dvec3() - mesh.centre(e).as_dvec3();
                     let spread = (hi - lo) * 0.5;
                     (own + gradient.transpose() * d).clamp(lo - spread, hi + spread).max(DVec3::ZERO)
                 }

@@ -20,7 +20,8 @@ use super::hierarchy::estimates::{EstimateHooks, EstimateLog};
 use super::hierarchy::part_file::{self, HierarchyPart};
 use super::hierarchy::shards::SharedEstimates;
 use super::hierarchy::{
-    self, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyError, HierarchyParams, HierarchyProgress,
+    self, interpolate::LeafMesh, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyError, HierarchyParams,
+    HierarchyProgress,
 };
 use super::leaf_mesh::{self, LeafGeometry, LeafMeshBuild};
 use super::method::{MethodError, PassOne, PassOneMethod, Reuse};
@@ -147,13 +148,14 @@ fn material_values(m: &Material) -> [f32; 11] {
     [kd.x, kd.y, kd.z, ke.x, ke.y, ke.z, ks.x, ks.y, ks.z, m.ior, m.transmittance]
 }
 
-/// Pass two's mesh and solution from a hierarchical solve (or from a saved one): the leaf mesh, its
-/// conforming vertex values, and the direct part estimated with shadow rays.
+/// Pass two's mesh and solution from a hierarchical solve: the leaf mesh, its conforming vertex values,
+/// and the direct part estimated with shadow rays and interpolated by the same vertex step
+/// (`LeafMesh::vertex_values`), so that total and direct agree where pass two subtracts them.
 pub fn solution_on_leaves(
     scene: &SceneDescription,
     geometry: LeafGeometry,
     leaf_exitance: &[Vec3],
-    leaf_vertex_exitance: &[Vec3],
+    leaves: &LeafMesh,
     textures: Arc<SceneTextures>,
     fingerprint: u64,
     stats: SolveStats,
@@ -162,14 +164,13 @@ pub fn solution_on_leaves(
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let direct = sampled_direct_exitance(&mesh, &scene.materials, &accel, DIRECT_SAMPLES, scene.radiosity.seed);
     let direct_f32: Vec<Vec3> = direct.iter().map(|v| v.as_vec3()).collect();
-    // The direct part is interpolated by area-weighted vertex means over the leaves (the back vertices
-    // then take their back leaf's interpolation, as for the total).
-    let direct_vertex = mesh.vertex_average(&direct);
-    let leaf_direct_vertex: Vec<Vec3> = direct_vertex[..geometry.positions.len()].iter().map(|v| v.as_vec3()).collect();
+    // Element i of the pass-two mesh is leaf i; the back vertices then take their back leaf's
+    // interpolation, as for the total.
+    let leaf_direct_vertex = leaves.vertex_values(&direct);
     let solution = Solution {
         element_exitance: leaf_exitance.to_vec(),
         element_direct_exitance: direct_f32,
-        vertex_exitance: leaf_mesh::vertex_values(&geometry, leaf_vertex_exitance, &back_vertices),
+        vertex_exitance: leaf_mesh::vertex_values(&geometry, &leaves.vertex_exitance, &back_vertices),
         vertex_direct_exitance: leaf_mesh::vertex_values(&geometry, &leaf_direct_vertex, &back_vertices),
         mesh_fingerprint: fingerprint,
         stats,
@@ -423,7 +424,7 @@ impl PassOneMethod for Hierarchical {
             scene,
             geometry,
             &solved.leaf_exitance,
-            &solved.mesh.vertex_exitance,
+            &solved.mesh,
             mesh.textures.clone(),
             fingerprint,
             solve_stats,

@@ -1,15 +1,19 @@
 //! The leaf elements as a shared-vertex mesh with conforming per-vertex exitance: vertices are shared
 //! within a smoothing group (edge-connected input triangles of one material and side whose normals
-//! differ by less than about 25°); a vertex takes the mean of the leaves around it weighted by their
-//! open area (`Nodes::open_area`, the area-weighted mean when nothing rests on the surface),
-//! except a hanging node (a vertex inside a coarser neighbour's edge), which takes that edge's
-//! interpolated value, so Gouraud shading shows no T-vertex cracks.
+//! differ by less than about 25°). Vertex values come from the element meshes' one vertex step
+//! (`boundary_vertices::vertex_values`): inside a group the mean of the leaves around a vertex
+//! weighted by their open area (`Nodes::open_area`, the area-weighted mean when nothing rests on the
+//! surface), on the group's boundary the clamped linear extrapolation from the leaves inside; then a
+//! hanging node (a vertex inside a coarser neighbour's edge) takes that edge's interpolated value, so
+//! Gouraud shading shows no T-vertex cracks.
 
 use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
 
 use super::clusters::InputTriangles;
 use super::nodes::Nodes;
+use crate::mesh::NONE;
+use crate::radiosity::boundary_vertices::{self, ElementMesh};
 
 /// Normals of triangles in one smoothing group differ by less than acos(0.9) ≈ 25.8°.
 const SMOOTHING_COS: f32 = 0.9;
@@ -26,8 +30,118 @@ pub struct LeafMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Per leaf: its node.
     pub leaf_node: Vec<u32>,
+    /// Per leaf: its smoothing group, its unit normal, its area and the open part of it
+    /// (`Nodes::open_area`; 0: buried inside an object resting on the surface), all m².
+    pub leaf_group: Vec<u32>,
+    pub leaf_normal: Vec<Vec3>,
+    pub leaf_area: Vec<f32>,
+    pub leaf_open_area: Vec<f32>,
+    /// Per vertex: it lies on its smoothing group's boundary (`boundary_vertices::boundary_vertices`
+    /// with the hanging nodes' edges cut at them).
+    pub boundary: Vec<bool>,
+    /// Hanging nodes as (m, a, b): vertex m at the midpoint of the leaf edge (a, b), in the order one
+    /// conforming sweep visits them (`conform`).
+    pub hanging: Vec<[u32; 3]>,
     /// Per vertex: conforming exitance (W/m²).
     pub vertex_exitance: Vec<Vec3>,
+}
+
+impl ElementMesh for LeafMesh {
+    fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    fn element_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    fn corners(&self, e: usize) -> [u32; 4] {
+        let [a, b, c] = self.triangles[e];
+        [a, b, c, NONE]
+    }
+
+    fn centre(&self, e: usize) -> Vec3 {
+        self.triangles[e].iter().map(|&v| self.positions[v as usize]).sum::<Vec3>() / 3.0
+    }
+
+    fn normal(&self, e: usize) -> Vec3 {
+        self.leaf_normal[e]
+    }
+
+    /// The open area: a leaf under an object resting on the surface is not averaged into its vertices.
+    fn weight(&self, e: usize) -> f64 {
+        self.leaf_open_area[e] as f64
+    }
+
+    fn surface(&self, e: usize) -> u32 {
+        self.leaf_group[e]
+    }
+
+    fn buried(&self, e: usize) -> bool {
+        !(self.leaf_open_area[e] > 0.0)
+    }
+
+    /// Open-area-weighted means: a vertex on the edge of an object resting on the surface takes the
+    /// open leaves' value, not the dark hidden ones'; a vertex with only hidden leaves around it takes
+    /// their area-weighted mean.
+    fn vertex_mean(&self, element_values: &[DVec3]) -> Vec<DVec3> {
+        let mut sum = vec![DVec3::ZERO; self.positions.len()];
+        let mut weight = vec![0.0f64; self.positions.len()];
+        let mut hidden_sum = vec![DVec3::ZERO; self.positions.len()];
+        let mut hidden_weight = vec![0.0f64; self.positions.len()];
+        for (l, t) in self.triangles.iter().enumerate() {
+            let (open, a) = (self.leaf_open_area[l] as f64, self.leaf_area[l] as f64);
+            for &v in t {
+                sum[v as usize] += element_values[l] * open;
+                weight[v as usize] += open;
+                hidden_sum[v as usize] += element_values[l] * a;
+                hidden_weight[v as usize] += a;
+            }
+        }
+        (0..sum.len())
+            .map(|v| {
+                if weight[v] > 0.0 {
+                    sum[v] / weight[v]
+                } else if hidden_weight[v] > 0.0 {
+                    hidden_sum[v] / hidden_weight[v]
+                } else {
+                    DVec3::ZERO
+                }
+            })
+            .collect()
+    }
+}
+
+impl LeafMesh {
+    /// Conforming per-vertex values of per-leaf values (exitance, its direct part; W/m²): the vertex
+    /// step of every element mesh (`boundary_vertices::vertex_values`: open-area means inside a
+    /// smoothing group, clamped extrapolation at its boundary), then every hanging node set to its
+    /// edge's interpolated value (`conform`).
+    pub fn vertex_values(&self, leaf_values: &[DVec3]) -> Vec<Vec3> {
+        let vertex = boundary_vertices::vertex_values(self, leaf_values, &self.boundary);
+        let mut value: Vec<DVec3> = vertex.iter().map(|v| v.as_dvec3()).collect();
+        self.conform(&mut value);
+        value.iter().map(|v| v.as_vec3()).collect()
+    }
+
+    /// Sets every hanging node m on edge (a, b) to (V_a + V_b)/2. The sweep visits coarse edges first,
+    /// but an edge's end can itself hang on an edge of the same or a shorter length visited later (a
+    /// T-junction that points the other way), and then the midpoint read a stale end. The hanging
+    /// nodes form a DAG (a midpoint depends only on its edge's ends), so repeating the sweep until
+    /// nothing changes settles it, one dependency level per sweep.
+    fn conform(&self, value: &mut [DVec3]) {
+        for _sweep in 0..MAX_HANGING_SWEEPS {
+            let mut changed = false;
+            for &[m, a, b] in &self.hanging {
+                let interpolated = (value[a as usize] + value[b as usize]) * 0.5;
+                changed |= value[m as usize] != interpolated;
+                value[m as usize] = interpolated;
+            }
+            if !changed {
+                break;
+            }
+        }
+    }
 }
 
 type PositionKey = [u32; 3];
@@ -80,7 +194,7 @@ pub fn smoothing_groups(nodes: &Nodes, inputs: &InputTriangles) -> Vec<u32> {
 }
 
 /// Leaf elements below `root` (depth-first order) with shared vertices and conforming vertex
-/// exitance.
+/// exitance (`LeafMesh::vertex_values`).
 pub fn leaf_mesh(nodes: &Nodes, inputs: &InputTriangles, root: usize) -> LeafMesh {
     let groups = smoothing_groups(nodes, inputs);
     let mut mesh = LeafMesh::default();
@@ -100,38 +214,15 @@ pub fn leaf_mesh(nodes: &Nodes, inputs: &InputTriangles, root: usize) -> LeafMes
         });
         mesh.triangles.push(tri);
         mesh.leaf_node.push(n as u32);
+        mesh.leaf_group.push(group);
+        mesh.leaf_normal.push(nodes.normal[n]);
+        mesh.leaf_area.push(nodes.area[n]);
+        mesh.leaf_open_area.push(nodes.open_area[n]);
     }
-    // Open-area-weighted means (`Nodes::open_area`): a vertex on the edge of an object resting on the
-    // surface takes the open leaves' value, not the dark hidden ones'; a vertex with only hidden
-    // leaves around it takes their area-weighted mean.
-    let mut sum = vec![DVec3::ZERO; mesh.positions.len()];
-    let mut weight = vec![0.0f64; mesh.positions.len()];
-    let mut hidden_sum = vec![DVec3::ZERO; mesh.positions.len()];
-    let mut hidden_weight = vec![0.0f64; mesh.positions.len()];
-    for (t, &n) in mesh.triangles.iter().zip(&mesh.leaf_node) {
-        let (open, a) = (nodes.open_area[n as usize] as f64, nodes.area[n as usize] as f64);
-        for &v in t {
-            sum[v as usize] += nodes.exitance[n as usize] * open;
-            weight[v as usize] += open;
-            hidden_sum[v as usize] += nodes.exitance[n as usize] * a;
-            hidden_weight[v as usize] += a;
-        }
-    }
-    let mut value: Vec<DVec3> = (0..sum.len())
-        .map(|v| {
-            if weight[v] > 0.0 {
-                sum[v] / weight[v]
-            } else if hidden_weight[v] > 0.0 {
-                hidden_sum[v] / hidden_weight[v]
-            } else {
-                DVec3::ZERO
-            }
-        })
-        .collect();
-    // Hanging nodes, coarsest edges first so that an edge's ends are final before its midpoint.
+    // Hanging nodes, coarsest edges first so that an edge's ends are usually final before its midpoint
+    // (`LeafMesh::conform` repeats the sweep for the rest).
     let mut edges: Vec<(f32, u32, u32, u32)> = Vec::new();
-    for (t, &n) in mesh.triangles.iter().zip(&mesh.leaf_node) {
-        let group = groups[nodes.input[n as usize] as usize];
+    for (t, &group) in mesh.triangles.iter().zip(&mesh.leaf_group) {
         for e in 0..3 {
             let (a, b) = (t[e], t[(e + 1) % 3]);
             let len = mesh.positions[a as usize].distance_squared(mesh.positions[b as usize]);
@@ -140,32 +231,25 @@ pub fn leaf_mesh(nodes: &Nodes, inputs: &InputTriangles, root: usize) -> LeafMes
     }
     edges.sort_by(|x, y| y.0.total_cmp(&x.0).then((x.1, x.2, x.3).cmp(&(y.1, y.2, y.3))));
     edges.dedup_by(|x, y| (x.1, x.2, x.3) == (y.1, y.2, y.3));
-    // Longest first is not always enough: an edge's end can itself hang on an edge of the same or a
-    // shorter length processed later (a T-junction that points the other way), and then the midpoint
-    // read a stale end. The hanging nodes form a DAG (a midpoint depends only on its edge's ends), so
-    // repeating the sweep until nothing changes settles it, one dependency level per sweep.
+    let mut midpoint_of: FxHashMap<(u32, u32), u32> = FxHashMap::default();
     let mut work = Vec::new();
-    for _sweep in 0..MAX_HANGING_SWEEPS {
-        let mut changed = false;
-        for &(_, group, a, b) in &edges {
-            work.push((a, b));
-            while let Some((a, b)) = work.pop() {
-                let mid = (mesh.positions[a as usize] + mesh.positions[b as usize]) * 0.5;
-                if let Some(&m) = vertex_of.get(&(group, key(mid))) {
-                    if m != a && m != b {
-                        let interpolated = (value[a as usize] + value[b as usize]) * 0.5;
-                        changed |= value[m as usize] != interpolated;
-                        value[m as usize] = interpolated;
-                        work.push((a, m));
-                        work.push((m, b));
-                    }
+    for &(_, group, a, b) in &edges {
+        work.push((a, b));
+        while let Some((a, b)) = work.pop() {
+            let mid = (mesh.positions[a as usize] + mesh.positions[b as usize]) * 0.5;
+            if let Some(&m) = vertex_of.get(&(group, key(mid))) {
+                if m != a && m != b {
+                    mesh.hanging.push([m, a, b]);
+                    midpoint_of.insert((a.min(b), a.max(b)), m);
+                    work.push((a, m));
+                    work.push((m, b));
                 }
             }
         }
-        if !changed {
-            break;
-        }
     }
-    mesh.vertex_exitance = value.iter().map(|v| v.as_vec3()).collect();
+    mesh.boundary =
+        boundary_vertices::boundary_vertices(&mesh, &|a, b| midpoint_of.get(&(a.min(b), a.max(b))).copied());
+    let exitance: Vec<DVec3> = mesh.leaf_node.iter().map(|&n| nodes.exitance[n as usize]).collect();
+    mesh.vertex_exitance = mesh.vertex_values(&exitance);
     mesh
 }
