@@ -96,7 +96,8 @@ fn percent_decode(href: &str) -> String {
 fn report_shows_every_job_with_images_that_exist_and_fetches_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let s = scene("cornell_box.toml");
-    // A reference of the same size: the radiosity image of the same scene.
+    // A reference of the same size: the radiosity image of the same scene, on the uniform matrix the
+    // batch job's final run solves (a radiosity-only render under `auto` takes the adaptive mesh).
     let reference = dir.path().join("reference.exr");
     let out = radray(&[
         "render",
@@ -105,6 +106,8 @@ fn report_shows_every_job_with_images_that_exist_and_fetches_nothing() {
         reference.to_str().unwrap(),
         "--mode",
         "radiosity",
+        "--method",
+        "matrix",
         "--width",
         "16",
         "--height",
