@@ -14,7 +14,7 @@ use super::nodes::Nodes;
 /// - `uniform`: the same on every member (links to an element, near links of a cluster);
 /// - `oriented[b]`: irradiance on the part of a cluster that faces bin b of the six-bin model
 ///   (`form_factor::projected_area_bins`: ±x, ±y, ±z). An element of unit normal n takes
-///   Σ_b w_b(n)·oriented[b], w_b(n) = max(0, ±n_k)/‖n‖₁ its bin weights, which sum to 1.
+///   Σ_b w_b(n)·oriented[b], w_b(n) = max(0, ±n_k)² its bin weights, which sum to 1.
 ///
 /// Power is conserved: Σ_members A_i (uniform + Σ_b w_b(n_i) oriented[b]) = A·uniform + Σ_b P_b
 /// oriented[b], P_b = Σ_i A_i w_b(n_i) the node's bins.
