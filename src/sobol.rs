@@ -8,17 +8,25 @@
 /// (0, 2)-sequence in base 2.
 pub fn sobol_2d_bits(i: u32) -> [u32; 2] {
     let mut y = 0u32;
-    let mut v = 1u32 << 31;
     let mut bits = i;
     while bits != 0 {
-        if bits & 1 != 0 {
-            y ^= v;
-        }
-        bits >>= 1;
-        v ^= v >> 1;
+        y ^= PASCAL_DIRECTIONS[bits.trailing_zeros() as usize];
+        bits &= bits - 1;
     }
     [i.reverse_bits(), y]
 }
+
+/// Direction numbers of Sobol's dimension 1: v₀ = 2³¹, v_{k+1} = v_k ⊕ (v_k ≫ 1).
+const PASCAL_DIRECTIONS: [u32; 32] = {
+    let mut v = [0u32; 32];
+    v[0] = 1 << 31;
+    let mut k = 1;
+    while k < 32 {
+        v[k] = v[k - 1] ^ (v[k - 1] >> 1);
+        k += 1;
+    }
+    v
+};
 
 /// Owen's nested uniform scrambling of a 32-bit fraction by hashing (Laine and Karras 2011's
 /// permutation on the reversed bits, constants from Burley 2020): each bit is flipped by a hash of

@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::form_factor::point_to_polygon;
 use super::nodes::Nodes;
 use super::tree_path::path_hash;
 use crate::accel::Accel;
@@ -99,20 +100,29 @@ impl EndPattern {
         (make(0x7ece_17e5), make(0x5005_ce5e))
     }
 
-    /// Point k, in [0, 1)² with 32-bit coordinates.
+    /// Point k (< 2^16), in [0, 1)² with 32-bit coordinates. The shuffled index keeps its low 16
+    /// bits: an aligned block of 2^m ≤ 2^16 indices still maps onto one, and Sobol's point costs
+    /// one XOR per set bit.
     pub fn point(&self, k: u32) -> [f64; 2] {
-        let [x, y] = sobol_2d_bits(owen_scramble(k, self.shuffle));
+        let [x, y] = sobol_2d_bits(owen_scramble(k, self.shuffle) & 0xffff);
         let unit = |b: u32| b as f64 * (1.0 / 4_294_967_296.0);
         [unit(owen_scramble(x, self.scramble[0])), unit(owen_scramble(y, self.scramble[1]))]
     }
 }
 
 /// A point uniformly distributed by area on `node` from (u, v) in [0,1)², and the unit normal of the
-/// element it lies on. A cluster is descended with u: the child whose share of the cumulative area
-/// holds u·A is taken and u rescaled to that share, u' = (u·A − A_before)/A_child (hierarchical sample
-/// warping), so a stratified set of (u, v) stays stratified across the cluster's members; the input
-/// triangle reached gets (u', v) through `triangle_point`.
+/// element it lies on (`sample_element`, then `triangle_point`).
 pub fn sample_point(nodes: &Nodes, node: usize, uv: [f64; 2]) -> (Vec3, Vec3) {
+    let (at, [u, v]) = sample_element(nodes, node, uv);
+    (triangle_point(&nodes.corners[at], u as f32, v as f32), nodes.normal[at])
+}
+
+/// The element below `node` (down to an input triangle) that (u, v) in [0,1)² picks with probability
+/// proportional to its area, and the (u', v) left for a point on it. A cluster is descended with u:
+/// the child whose share of the cumulative area holds u·A is taken and u rescaled to that share,
+/// u' = (u·A − A_before)/A_child (hierarchical sample warping), so a stratified set of (u, v) stays
+/// stratified across the cluster's members.
+pub fn sample_element(nodes: &Nodes, node: usize, uv: [f64; 2]) -> (usize, [f64; 2]) {
     let [mut u, v] = uv;
     let mut at = node;
     while nodes.is_cluster[at] {
@@ -134,7 +144,7 @@ pub fn sample_point(nodes: &Nodes, node: usize, uv: [f64; 2]) -> (Vec3, Vec3) {
         }
         (at, u) = chosen;
     }
-    (triangle_point(&nodes.corners[at], u as f32, v as f32), nodes.normal[at])
+    (at, [u, v])
 }
 
 /// Uniform point on a triangle from the unit square: p = (1 − √u)·a + √u(1 − v)·b + √u·v·c
@@ -144,37 +154,59 @@ pub fn triangle_point(t: &[Vec3; 3], u: f32, v: f32) -> Vec3 {
     t[0] * (1.0 - su) + t[1] * (su * (1.0 - v)) + t[2] * (su * v)
 }
 
-/// A ray-traced form factor for links whose ends are too near for the cluster formula (overlapping
+/// A sampled form factor for links whose ends are too near for the cluster formula (overlapping
 /// bounding spheres, or a cluster straddling an element's plane), and for a cluster's self-link:
+/// Monte Carlo over the receiver, exact in each sampled source element:
 ///
-/// F_RS ≈ (1/N) Σ_k A_S cos θ_x cos θ_y V(x_k, y_k) / (π d_k² + A_S/N)
+/// F_RS ≈ (1/N) Σ_k F(x_k → t_k) · (A_S / A_t_k) · V_k
 ///
-/// over N = 2 × `ctx.rays` point pairs, x_k and y_k points k of the ends' `EndPattern`s (stratified
-/// nets, each point uniform by area on its end) (Wallace, Elmquist and Haines 1989: each sample stands for a disk of area A_S/N, which keeps
-/// the kernel bounded when the ends touch). Pairs that do not face each other contribute 0. Returns
-/// (F, pairs that faced each other): 0 facing pairs means the ends cannot exchange light at all (a
+/// over N = 2 × `ctx.rays` samples: x_k point k of the receiver's `EndPattern` (uniform by area), t_k
+/// the source element that point k of the source's pattern falls in (probability A_t/A_S, `sample_point`'s
+/// descent), F(x → t) Lambert's exact unoccluded point-to-polygon form factor
+/// (`form_factor::point_to_polygon`, one-sided, clipped to x's hemisphere), which is bounded, so
+/// ends that touch need no regularisation. V_k is the ray x_k → y_k, y_k the pattern's point on t_k,
+/// when the two face each other; a sample whose y_k does not (it lies in the part of t_k the
+/// clipping removed) takes the kernel-weighted visibility of the others,
+/// V̄ = Σ F_k V_k / Σ F_k (1 if there are none). Unbiased without occluders.
+/// Returns (F, samples with F(x_k → t_k) > 0): 0 means the ends cannot exchange light at all (a
 /// convex object's own cluster, a flat cluster), and the link can be dropped.
+///
+/// Until session 12 this was Wallace, Elmquist and Haines' (1989) disk estimator,
+/// A_S cos θ_x cos θ_y V / (π d² + A_S/N) per point pair: its disk term biased touching ends low by
+/// 18–42% (tests/hierarchy.rs), which darkened cornell_original's floor between the blocks.
 pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, source: usize) -> (f64, u32) {
     let n = 2 * ctx.rays.max(1);
     let (at_receiver, at_source) = EndPattern::pair(link_seed(ctx.seed ^ 0x5eed_f0f0, nodes, receiver, source));
-    let disk = nodes.area[source] as f64 / n as f64;
-    let (mut sum, mut facing) = (0.0f64, 0u32);
+    let source_area = nodes.area[source] as f64;
+    // Σ F_k V_k and Σ F_k over samples with a visibility ray; Σ F_k over samples without one.
+    let (mut seen, mut tested, mut untested) = (0.0f64, 0.0f64, 0.0f64);
+    let mut facing = 0u32;
     for k in 0..n {
         let (x, nx) = sample_point(nodes, receiver, at_receiver.point(k));
-        let (y, ny) = sample_point(nodes, source, at_source.point(k));
-        let d = y - x;
-        let d2 = d.length_squared() as f64;
-        let (cx, cy) = (nx.dot(d) as f64, -ny.dot(d) as f64);
-        if !(cx > 0.0 && cy > 0.0 && d2 > 0.0) {
+        let (t, [u, v]) = sample_element(nodes, source, at_source.point(k));
+        let corners = &nodes.corners[t];
+        let element_area = nodes.area[t] as f64;
+        if !(element_area > 0.0) {
+            continue;
+        }
+        let f = point_to_polygon(x, nx, corners) * source_area / element_area;
+        if !(f > 0.0) {
             continue;
         }
         facing += 1;
+        let (y, ny) = (triangle_point(corners, u as f32, v as f32), nodes.normal[t]);
+        let d = y - x;
+        if !(ny.dot(d) < 0.0 && nx.dot(d) > 0.0) {
+            untested += f;
+            continue;
+        }
+        tested += f;
         let xo = x + nx * ctx.offset;
         let yo = y + ny * ctx.offset;
         if !ctx.accel.occluded(xo, yo - xo, 1.0) {
-            // cos θ_x cos θ_y = (n_x·d)(−n_y·d)/d².
-            sum += nodes.area[source] as f64 * cx * cy / d2 / (std::f64::consts::PI * d2 + disk);
+            seen += f;
         }
     }
-    ((sum / n as f64).min(1.0), facing)
+    let mean_visibility = if tested > 0.0 { seen / tested } else { 1.0 };
+    (((seen + untested * mean_visibility) / n as f64).min(1.0), facing)
 }
