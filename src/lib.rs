@@ -21,5 +21,6 @@ pub mod radiosity;
 pub mod rng;
 pub mod run;
 pub mod scene;
+pub mod sobol;
 pub mod trace;
 pub mod transport;

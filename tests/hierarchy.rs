@@ -604,6 +604,16 @@ fn light_does_not_leak_through_a_wall_into_a_dark_room() {
 /// accelerator over all their triangles (nothing else in the scene). Returns (nodes, receiver, source,
 /// accel).
 fn two_clusters(p1: &[Vec3], p2: &[Vec3], levels: u32) -> (Nodes, usize, usize, radray::accel::Accel) {
+    two_clusters_with(p1, p2, levels, &[])
+}
+
+/// `two_clusters`, with the fan triangles of polygon `blockers` (if any) in the ray accelerator only.
+fn two_clusters_with(
+    p1: &[Vec3],
+    p2: &[Vec3],
+    levels: u32,
+    blockers: &[Vec3],
+) -> (Nodes, usize, usize, radray::accel::Accel) {
     let mut nodes = Nodes::default();
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     let mut ends = [0usize; 2];
@@ -620,8 +630,120 @@ fn two_clusters(p1: &[Vec3], p2: &[Vec3], levels: u32) -> (Nodes, usize, usize, 
         nodes.set_cluster_children(cluster, first, u8::try_from(pieces.len()).unwrap());
         ends[k] = cluster;
     }
+    if blockers.len() >= 3 {
+        for t in fan(blockers) {
+            let base = positions.len() as u32;
+            positions.extend_from_slice(&t);
+            triangles.push([base, base + 1, base + 2]);
+        }
+    }
     let accel = radray::accel::Accel::build(&positions, &triangles);
     (nodes, ends[0], ends[1], accel)
+}
+
+/// Two unit squares facing each other across z = 0 … 2 (the receiver at z = 0 facing +z, the source
+/// at z = 2 facing −z, each a cluster of its two triangles) and, if `occluded`, a plate at z = 1 over
+/// x < 0.5 (two triangles, wider than both squares). A segment from (x₁, ·, 0) to (x₂, ·, 2) crosses
+/// z = 1 at (x₁ + x₂)/2, so it is blocked iff x₁ + x₂ < 1: for points uniform on both squares the
+/// unoccluded fraction is exactly 1/2. Returns (nodes, receiver, source, accel).
+fn facing_squares(occluded: bool) -> (Nodes, usize, usize, radray::accel::Accel) {
+    let receiver =
+        [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+    let source =
+        [Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 1.0, 2.0), Vec3::new(1.0, 1.0, 2.0), Vec3::new(1.0, 0.0, 2.0)];
+    let plate =
+        [Vec3::new(-5.0, -5.0, 1.0), Vec3::new(0.5, -5.0, 1.0), Vec3::new(0.5, 6.0, 1.0), Vec3::new(-5.0, 6.0, 1.0)];
+    let blockers: &[Vec3] = if occluded { &plate } else { &[] };
+    two_clusters_with(&receiver, &source, 0, blockers)
+}
+
+/// Independent pairs give V's binomial variance V(1 − V)/N; the estimator before session 12 (x
+/// stratified in its triangle's first coordinate, N strata, everything else independent: a cluster
+/// member picked at random per point) is reproduced here as the yardstick.
+fn visibility_before_session_12(
+    ctx: &hierarchy::visibility::VisibilityContext,
+    nodes: &Nodes,
+    receiver: usize,
+    source: usize,
+) -> f64 {
+    use hierarchy::visibility::{link_seed, triangle_point};
+    use radray::rng::Pcg32;
+    let n = ctx.rays;
+    let mut rng = Pcg32::new(link_seed(ctx.seed, nodes, receiver, source), 0);
+    let shift = rng.next_u32() % n;
+    let point = |node: usize, u: f32, rng: &mut Pcg32| {
+        let v = rng.next_f32();
+        let children: Vec<usize> = nodes.children(node).collect();
+        let total: f32 = children.iter().map(|&c| nodes.area[c]).sum();
+        let mut pick = rng.next_f32() * total;
+        let mut chosen = *children.last().unwrap();
+        for &c in &children {
+            if pick < nodes.area[c] {
+                chosen = c;
+                break;
+            }
+            pick -= nodes.area[c];
+        }
+        (triangle_point(&nodes.corners[chosen], u, v), nodes.normal[chosen])
+    };
+    let mut visible = 0;
+    for k in 0..n {
+        let ur = (k as f32 + rng.next_f32()) / n as f32;
+        let us = (((k + shift) % n) as f32 + rng.next_f32()) / n as f32;
+        let (x, nx) = point(receiver, ur, &mut rng);
+        let (y, ny) = point(source, us, &mut rng);
+        let (xo, yo) = (x + nx * ctx.offset, y + ny * ctx.offset);
+        visible += !ctx.accel.occluded(xo, yo - xo, 1.0) as u32;
+    }
+    visible as f64 / n as f64
+}
+
+/// Mean and sample variance over seeds 0..`seeds` of `estimate(seed)`.
+fn mean_and_variance(seeds: u64, estimate: impl Fn(u64) -> f64) -> (f64, f64) {
+    let samples: Vec<f64> = (0..seeds).map(estimate).collect();
+    let mean = samples.iter().sum::<f64>() / seeds as f64;
+    let var = samples.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
+    (mean, var)
+}
+
+/// Link visibility (`visibility::link_visibility`) of the half-occluded squares (`facing_squares`,
+/// exact V = 1/2) at 16 rays over 512 seeds: the mean is within 4 standard errors of 1/2, so the
+/// stratified, scrambled patterns stay unbiased; and the variance of one estimate is below 0.6 of
+/// the estimator it replaced (`visibility_before_session_12`). Measured (session 12): variance
+/// 5.8e-3 against 1.23e-2 before (0.47×) and V(1 − V)/N = 1.6e-2 for independent pairs. Not less:
+/// whether a ray is blocked depends on x₁ + x₂, both ends at once, and stratifying each end alone
+/// does not stratify that sum. The bound leaves 0.13 for the estimate of the ratio, whose relative
+/// error over 512 seeds is about √(2/511)·√2 ≈ 9%.
+#[test]
+fn link_visibility_of_a_half_occluded_pair_converges_to_one_half_with_less_variance_than_before() {
+    use hierarchy::visibility::{link_visibility, VisibilityContext};
+    let (nodes, r, s, accel) = facing_squares(true);
+    let ctx = |seed| VisibilityContext { accel: &accel, rays: 16, offset: 1e-5, seed };
+    let seeds = 512;
+    let (mean, var) = mean_and_variance(seeds, |seed| link_visibility(&ctx(seed), &nodes, r, s).visible as f64);
+    let (old_mean, old_var) = mean_and_variance(seeds, |seed| visibility_before_session_12(&ctx(seed), &nodes, r, s));
+    println!("V mean {mean:.4}, variance {var:.2e}; before: mean {old_mean:.4}, variance {old_var:.2e}");
+    let standard_error = (var / seeds as f64).sqrt();
+    assert!((mean - 0.5).abs() <= 4.0 * standard_error, "mean {mean} ± {standard_error}");
+    assert!(var < 0.6 * old_var, "variance {var:.2e} against {old_var:.2e} before");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Whatever the seed and ray count, V is a fraction in [0, 1], and a link nothing can block gets
+    /// exactly 1 (every ray reaches: no noise where there is no occluder).
+    #[test]
+    fn link_visibility_is_a_fraction_and_exactly_one_when_nothing_blocks(seed in any::<u64>(), rays in 1u32..40) {
+        use hierarchy::visibility::{link_visibility, VisibilityContext};
+        let (nodes, r, s, accel) = facing_squares(true);
+        let ctx = VisibilityContext { accel: &accel, rays, offset: 1e-5, seed };
+        let v = link_visibility(&ctx, &nodes, r, s).visible;
+        prop_assert!((0.0..=1.0).contains(&v), "{v}");
+        let (nodes, r, s, accel) = facing_squares(false);
+        let ctx = VisibilityContext { accel: &accel, rays, offset: 1e-5, seed };
+        prop_assert_eq!(link_visibility(&ctx, &nodes, r, s).visible, 1.0);
+    }
 }
 
 /// The near-link leaf-pair estimator (`links::near_form_factor` with at most 64 leaf pairs: the element
@@ -653,18 +775,21 @@ fn near_link_leaf_pair_estimator_matches_polygon_to_polygon_cases() {
     assert_eq!(checked, 9);
 }
 
-/// The near-link ray estimator (`visibility::sampled_form_factor`, Wallace et al.'s disk estimator,
-/// used by `links::near_form_factor` above 64 leaf pairs) against every polygon-to-polygon case, with
-/// the default 8 visibility rays (16 point pairs), averaged over 64 seeds: its bias must be within 4
-/// standard errors of that mean.
+/// The near-link sampled estimator (`visibility::sampled_form_factor`: Lambert's exact form factor
+/// from a receiver point to an area-picked source element, times a ray; used by
+/// `links::near_form_factor` above 64 leaf pairs) against every polygon-to-polygon case, with the
+/// default 8 visibility rays, averaged over 64 seeds: its bias must be within 4 standard errors of
+/// that mean.
 ///
-/// Ignored: it is biased low where the ends are close, because each sample's kernel is divided by
-/// π d² + A_S/N and the disk term dominates near the ends' contact. Measured (bias relative, standard
-/// error): parallel squares at separation 0.5 −4.3% (2.6%), at 1 and 2 within 1.2%; perpendicular
-/// rectangles sharing an edge −18% to −42% (4–6%); disks r 1 → 2 at separation 0.5 −30% (3.7%); other
-/// disks within 1.6%. This is suspect (a) of issue 10 for near cluster links, still to fix.
+/// Ignored: still biased low where the ends touch or nearly do. Measured in session 12 (bias relative,
+/// standard error): parallel squares within 2.3% (3.2%); perpendicular rectangles sharing an edge
+/// −14% to −23% (5.5–7.4%); disks r 1 → 2 at separation 0.5 −13% (3.0%), other disks within 3.1%;
+/// worst at 4.4 standard errors. With Wallace's disk estimator it was: squares at separation 0.5
+/// −4.3%, shared edges −18% to −42%, disks r 1 → 2 −30%. The unoccluded part is unbiased by
+/// construction, so what is left is suspect in the rays (a near-grazing pair blocked by an end's own
+/// triangles) or in the visibility given to pairs whose source point lies behind the receiver's plane.
 #[test]
-#[ignore = "the ray-traced near-link estimator is biased low by 18-42% on touching or close cases (see doc comment)"]
+#[ignore = "the sampled near-link estimator is still biased low by 13-23% on touching or close cases (see doc comment)"]
 fn near_link_ray_estimator_is_unbiased_on_polygon_to_polygon_cases() {
     use radray::radiosity::hierarchy::links::near_form_factor;
     use radray::radiosity::hierarchy::visibility::VisibilityContext;

@@ -140,7 +140,7 @@ pub fn source_variation_power(nodes: &Nodes, receiver: usize, source: usize, coe
 }
 
 /// Whether a link is *near*: a cluster's self-link, or a link with a cluster end that is not
-/// `admissible` for the cluster formula. Near links are estimated with rays
+/// `admissible` for the cluster formula. Near links are estimated by sampling
 /// (`visibility::sampled_form_factor`) and their error is the bound `near_spread`.
 pub fn is_near(nodes: &Nodes, receiver: usize, source: usize) -> bool {
     receiver == source || !admissible(nodes, receiver, source)

@@ -13,7 +13,7 @@
 //! - far links with a cluster end: Sillion's isotropic-cluster formula times ray visibility;
 //! - near links (overlapping bounding spheres, a cluster straddling an element's plane, a cluster's
 //!   self-link): the element estimator summed over all leaf pairs when there are at most 64, else
-//!   Wallace et al.'s ray-traced disk estimator (`visibility::sampled_form_factor`).
+//!   a sampled estimator exact in each sampled source element (`visibility::sampled_form_factor`).
 //!
 //! The hemicube is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
 
