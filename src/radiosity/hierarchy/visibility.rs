@@ -7,6 +7,7 @@ use super::nodes::Nodes;
 use super::tree_path::path_hash;
 use crate::accel::Accel;
 use crate::rng::{splitmix64, Pcg32};
+use crate::transport::hit::leave_surface;
 
 /// What the visibility estimate needs besides the two nodes.
 pub struct VisibilityContext<'a> {
@@ -67,8 +68,8 @@ pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, 
             continue;
         }
         facing += 1;
-        let xo = x + nx * ctx.offset;
-        let yo = y + ny * ctx.offset;
+        let xo = leave_surface(x, nx, ctx.offset);
+        let yo = leave_surface(y, ny, ctx.offset);
         if !ctx.accel.occluded(xo, yo - xo, 1.0) {
             visible += 1;
         }
@@ -132,8 +133,8 @@ pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usi
             continue;
         }
         facing += 1;
-        let xo = x + nx * ctx.offset;
-        let yo = y + ny * ctx.offset;
+        let xo = leave_surface(x, nx, ctx.offset);
+        let yo = leave_surface(y, ny, ctx.offset);
         if !ctx.accel.occluded(xo, yo - xo, 1.0) {
             // cos θ_x cos θ_y = (n_x·d)(−n_y·d)/d².
             sum += nodes.area[source] as f64 * cx * cy / d2 / (std::f64::consts::PI * d2 + disk);
