@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::accel::Accel;
 use crate::mesh::{Mesh, NONE};
+use crate::transport::hit::leave_surface;
 
 /// Rays per element: a stratified 4 × 4 cosine-weighted grid over its hemisphere.
 const RAYS_SIDE: usize = 4;
@@ -27,7 +28,7 @@ pub fn hidden_share(mesh: &Mesh, accel: &Accel) -> Vec<f32> {
         .into_par_iter()
         .map(|i| {
             let n = e.normal[i];
-            let origin = e.centre[i] + n * (1e-3 * e.area[i].sqrt());
+            let origin = leave_surface(e.centre[i], n, 1e-3 * e.area[i].sqrt());
             let (t, b) = n.any_orthonormal_pair();
             let mut hidden = 0usize;
             for a in 0..RAYS_SIDE {

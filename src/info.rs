@@ -43,10 +43,9 @@ pub struct InfoReport {
     pub geometry: crate::scene::lint::GeometryReport,
 }
 
-/// Polygon area by Newell's formula.
+/// Polygon area by Newell's formula (`scene::shapes::polygon_normal`: on the polygon's own edges).
 fn area(v: &[glam::Vec3]) -> f64 {
-    let n: glam::Vec3 = (0..v.len()).map(|i| v[i].cross(v[(i + 1) % v.len()])).sum();
-    0.5 * n.length() as f64
+    0.5 * crate::scene::shapes::polygon_normal(v).length() as f64
 }
 
 /// Builds the report (meshing is only counted, never done).

@@ -35,6 +35,7 @@ use crate::progress::Progress;
 use crate::rng::Pcg32;
 use crate::scene::{Material, Quality, SceneDescription, SolverKind};
 use crate::transport::emitters::Emitters;
+use crate::transport::hit::{leave_surface, offset_at};
 use crate::transport::photons::RunPhotons;
 
 /// Shadow rays per leaf for the direct part of its exitance.
@@ -217,7 +218,7 @@ pub fn sampled_direct_exitance(
             if rho.max_element() <= 0.0 {
                 return DVec3::ZERO;
             }
-            let (n, origin) = (e.normal[i], e.centre[i] + e.normal[i] * offset);
+            let (n, origin) = (e.normal[i], leave_surface(e.centre[i], e.normal[i], offset));
             let mut rng = Pcg32::new(seed ^ 0x6469_7265_6374, i as u64);
             let mut irradiance = DVec3::ZERO;
             for k in 0..samples {
@@ -234,7 +235,8 @@ pub fn sampled_direct_exitance(
                 let t = sample.triangle as usize;
                 let cos_front = -e.normal[mesh.triangle_element[t] as usize].dot(w);
                 let Some(emitter) = mesh.side_element(t, cos_front > 0.0) else { continue };
-                if cos_here <= 0.0 || accel.occluded(origin, w, dist * (1.0 - 1e-4)) {
+                if cos_here <= 0.0 || accel.occluded(origin, w, dist - (dist * 1e-4).max(offset_at(sample.point, 0.0)))
+                {
                     continue;
                 }
                 let g = cos_here * cos_front.abs() / (std::f32::consts::PI * dist2);

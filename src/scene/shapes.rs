@@ -79,9 +79,14 @@ pub(super) fn normalise_surfaces(surfaces: Vec<Surface>) -> (Vec<Surface>, usize
     (out, degenerate)
 }
 
-/// Newell's normal (twice the vector area) of a polygon.
-fn polygon_normal(v: &[Vec3]) -> Vec3 {
-    (0..v.len()).map(|i| v[i].cross(v[(i + 1) % v.len()])).sum()
+/// Newell's normal (twice the vector area) of a polygon, n = Σ (v_k − v₀) × (v_{k+1} − v₀): the same
+/// vector as Σ v_k × v_{k+1}, but computed from the polygon's own edges, so a face far from the origin
+/// keeps its area. (Summed on absolute coordinates, the products of a face at 3,000 units cancel to
+/// ±1 ulp of 10⁷: alcove_hall moved by [1000, 200, −3000] lost 16 faces as "zero-area", a lamp's
+/// half among them.)
+pub(crate) fn polygon_normal(v: &[Vec3]) -> Vec3 {
+    let o = v[0];
+    (1..v.len().saturating_sub(1)).map(|k| (v[k] - o).cross(v[k + 1] - o)).sum()
 }
 
 fn is_convex(v: &[Vec3], n: Vec3) -> bool {
@@ -89,4 +94,27 @@ fn is_convex(v: &[Vec3], n: Vec3) -> bool {
         let (a, b, c) = (v[i], v[(i + 1) % v.len()], v[(i + 2) % v.len()]);
         (b - a).cross(c - b).dot(n) > 0.0
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::vec3;
+
+    /// A 0.5 × 0.25 quad (area 0.125) and its copy moved to [1000, 200, −3000] and to 10⁵.
+    fn quad_at(offset: Vec3) -> Vec<Vec3> {
+        [vec3(0.0, 0.0, 0.0), vec3(0.5, 0.0, 0.0), vec3(0.5, 0.25, 0.0), vec3(0.0, 0.25, 0.0)]
+            .map(|v| v + offset)
+            .to_vec()
+    }
+
+    #[test]
+    fn polygon_normal_keeps_a_face_area_far_from_the_origin() {
+        for offset in [Vec3::ZERO, vec3(1000.0, 200.0, -3000.0), vec3(1e5, 0.0, 0.0)] {
+            let n = polygon_normal(&quad_at(offset));
+            // The corners are exact in f32 at these offsets (multiples of 1/128), so only the
+            // products round: two triangles' cross products of coordinates below 1, a few ulps.
+            assert!((n - vec3(0.0, 0.0, 0.25)).length() < 1e-6, "{offset}: {n}");
+        }
+    }
 }

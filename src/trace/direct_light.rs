@@ -12,6 +12,7 @@ use crate::film::Sampler;
 use crate::mesh::Mesh;
 use crate::transport::cut_outs::OpaqueRay;
 use crate::transport::emitters::Emitters;
+use crate::transport::hit::{leave_surface, offset_at};
 
 /// The direct light at a diffuse hit: irradiance E_direct and the highlight integral (see
 /// [`DirectLight::estimate`]).
@@ -121,7 +122,7 @@ impl<'a> DirectLight<'a> {
             return out;
         }
         let mesh = self.mesh;
-        let origin = p + n * self.offset;
+        let origin = leave_surface(p, n, self.offset);
         let count = samples as f32;
         let pattern = sampler.pattern_2d(samples);
         for k in 0..samples {
@@ -144,7 +145,7 @@ impl<'a> DirectLight<'a> {
                 continue;
             };
             counts.shadow += 1;
-            if self.opaque_ray().blocked(origin, w, dist - self.offset) {
+            if self.opaque_ray().blocked(origin, w, dist - offset_at(sample.point, self.offset)) {
                 continue;
             }
             let contribution = emitted_radiance * (cos_here * cos_light / dist2 * sample.inverse_density / count);

@@ -5,6 +5,7 @@
 
 use glam::Vec3;
 
+use super::hit::offset_at;
 use super::SurfaceHit;
 use crate::accel::Accel;
 use crate::mesh::Mesh;
@@ -76,8 +77,9 @@ impl OpaqueRay<'_> {
             if !is_cut_out(self.mesh, &surface_hit, distance * spread_rad) {
                 return Walk::Opaque(surface_hit, distance);
             }
-            from = surface_hit.position + dir * self.offset;
-            travelled = distance + self.offset;
+            let step = offset_at(surface_hit.position, self.offset);
+            from = surface_hit.position + dir * step;
+            travelled = distance + step;
             if travelled >= t_max {
                 return Walk::Clear;
             }

@@ -8,7 +8,7 @@ use std::f32::consts::PI;
 
 use super::cut_outs::OpaqueRay;
 use super::emitters::PhotonSources;
-use super::hit::{ray_offset, scene_scale};
+use super::hit::{leave_surface, ray_offset, scene_scale};
 use super::scatter::{carries, scatter};
 use crate::accel::Accel;
 use crate::mesh::{Mesh, NONE};
@@ -137,7 +137,11 @@ pub fn trace_photons(
                 continue;
             }
             let weight = Vec3::splat(cos_emit * emitted.inverse_density * solid_angle / photons_per_group);
-            let origin = x + e.normal[front_element] * (if cos_front > 0.0 { offset } else { -offset });
+            let origin = leave_surface(
+                x,
+                if cos_front > 0.0 { e.normal[front_element] } else { -e.normal[front_element] },
+                offset,
+            );
             let photon = Photon { origin, dir, throughput: weight, source: element as u32 };
             rays += follower.follow(g, photon, offset, &mut rng, &mut out);
         }

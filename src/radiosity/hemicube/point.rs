@@ -32,12 +32,13 @@ pub fn point_form_factors(
     out
 }
 
-/// Unit normal (Newell's method: n ∝ Σ v_k × v_{k+1}) and vertex centroid of a polygon.
+/// Unit normal (Newell's method: n ∝ Σ (v_k − v₀) × (v_{k+1} − v₀), on the polygon's own edges so
+/// that it keeps its precision far from the origin) and vertex centroid of a polygon.
 pub fn newell_plane(poly: &[Vec3]) -> (Vec3, Vec3) {
     let mut n = Vec3::ZERO;
     let mut c = Vec3::ZERO;
     for (k, &v) in poly.iter().enumerate() {
-        n += v.cross(poly[(k + 1) % poly.len()]);
+        n += (v - poly[0]).cross(poly[(k + 1) % poly.len()] - poly[0]);
         c += v;
     }
     (n.normalize_or_zero(), c / poly.len() as f32)

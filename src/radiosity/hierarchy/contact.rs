@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use super::clusters::TracingTriangles;
 use super::nodes::{quarters, Nodes};
 use crate::accel::Accel;
+use crate::transport::hit::leave_surface;
 
 /// Probe points per element are the centroids of its 4^k midpoint sub-triangles, k at most this
 /// (64 points): fine enough to find a block's footprint on a floor triangle 6× its area.
@@ -39,7 +40,7 @@ impl ContactProbe<'_> {
     /// back of a one-sided triangle or anything within `contact_distance`. One ray escaping, or
     /// hitting a front (or a two-sided surface), means light can come in from that side.
     pub fn enclosed(&self, p: Vec3, n: Vec3) -> bool {
-        let origin = p + n * self.offset;
+        let origin = leave_surface(p, n, self.offset);
         let (t, b) = n.any_orthonormal_pair();
         let side = (1.0 - SIDE_RAY_COS * SIDE_RAY_COS).sqrt();
         let directions = [

@@ -9,6 +9,7 @@ use super::tree_path::path_hash;
 use crate::accel::Accel;
 use crate::rng::splitmix64;
 use crate::sobol::{owen_scramble, sobol_2d_bits};
+use crate::transport::hit::leave_surface;
 
 /// What the visibility estimate needs besides the two nodes.
 pub struct VisibilityContext<'a> {
@@ -69,8 +70,8 @@ pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, 
             continue;
         }
         facing += 1;
-        let xo = x + nx * ctx.offset;
-        let yo = y + ny * ctx.offset;
+        let xo = leave_surface(x, nx, ctx.offset);
+        let yo = leave_surface(y, ny, ctx.offset);
         if !ctx.accel.occluded(xo, yo - xo, 1.0) {
             visible += 1;
         }
@@ -204,8 +205,8 @@ pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usi
             continue;
         }
         tested += f;
-        let xo = x + nx * ctx.offset;
-        let yo = y + ny * ctx.offset;
+        let xo = leave_surface(x, nx, ctx.offset);
+        let yo = leave_surface(y, ny, ctx.offset);
         if !ctx.accel.occluded(xo, yo - xo, 1.0) {
             seen += f;
         }

@@ -10,6 +10,7 @@ use glam::Vec3;
 use super::hemisphere::{frame, Strata};
 use crate::film::Sampler;
 use crate::trace::whitted::{RayCounts, Tracer};
+use crate::transport::hit::leave_surface;
 use crate::transport::SurfaceHit;
 
 /// Shadow rays per near hit: one, since a gather averages its near hits' estimates over hundreds of
@@ -64,7 +65,7 @@ impl Tracer<'_> {
         let (x, n) = (hit.position, hit.geometric_normal);
         let direct = self.direct_light().estimate(NEAR_LIGHT_SAMPLES, x, n, None, sampler, counts).irradiance;
         let (t, b) = frame(n);
-        let origin = x + n * self.ray_offset();
+        let origin = leave_surface(x, n, self.ray_offset());
         let strata = near.strata;
         let mut sum = Vec3::ZERO;
         for j in 0..strata.rings {

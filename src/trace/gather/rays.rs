@@ -11,6 +11,7 @@ use super::hemisphere::{estimate, frame, HemisphereEstimate, Strata};
 use super::near::NearBounce;
 use crate::film::Sampler;
 use crate::trace::whitted::{RayCounts, Tracer};
+use crate::transport::hit::leave_surface;
 use crate::transport::ray_stack::RayStack;
 use crate::transport::scatter::scatter;
 
@@ -33,7 +34,7 @@ impl Tracer<'_> {
         counts: &mut RayCounts,
     ) -> HemisphereEstimate {
         let (t, b) = frame(n);
-        let origin = p + n * self.ray_offset();
+        let origin = leave_surface(p, n, self.ray_offset());
         let mut radiance = Vec::with_capacity(strata.cells());
         let mut distance = Vec::with_capacity(strata.cells());
         for j in 0..strata.rings {

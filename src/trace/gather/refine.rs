@@ -10,6 +10,7 @@ use glam::Vec3;
 use super::hemisphere::{frame, relative_error, HemisphereEstimate, Strata};
 use crate::film::Sampler;
 use crate::trace::whitted::{RayCounts, Tracer};
+use crate::transport::hit::leave_surface;
 
 /// Rays of the pilot gather (an 5 × 13 stratification).
 pub const PILOT_RAYS: u32 = 64;
@@ -53,7 +54,7 @@ impl Tracer<'_> {
     /// its rays reading the interpolated solution (no second bounce at near hits).
     pub fn pilot_error(&self, p: Vec3, n: Vec3, strata: Strata, sampler: &mut Sampler, counts: &mut RayCounts) -> f32 {
         let (t, b) = frame(n);
-        let origin = p + n * self.ray_offset();
+        let origin = leave_surface(p, n, self.ray_offset());
         let mut radiance = Vec::with_capacity(strata.cells());
         for j in 0..strata.rings {
             for k in 0..strata.sectors {
