@@ -9,7 +9,9 @@ use std::path::Path;
 use glam::Vec3;
 use radray::mesh::Mesh;
 use radray::progress::Progress;
-use radray::radiosity::adaptive::criterion::{across_concave_edges, elements_to_split, irradiance_variation, variation};
+use radray::radiosity::adaptive::criterion::{
+    across_concave_edges, elements_to_split, irradiance_variation, variation,
+};
 use radray::radiosity::adaptive::hanging::{conform, hanging_vertices};
 use radray::radiosity::adaptive::subdivide::{split, EdgeMidpoints};
 use radray::radiosity::adaptive::substructure::{kept_rows, new_indices};
@@ -150,7 +152,8 @@ fn the_irradiance_criterion_scaled_by_a_uniform_albedo_is_the_exitance_criterion
     }
     let exitance: Vec<Vec3> = (0..e.len()).map(|i| e.reflectance[i] * room_irradiance(e.centre[i])).collect();
     // Today's criterion: the exitance's own vertex step (as the solver makes `vertex_exitance`).
-    let mut vertex_exitance = vertex_values(&mesh, &exitance.iter().map(|b| b.as_dvec3()).collect::<Vec<_>>(), &boundary);
+    let mut vertex_exitance =
+        vertex_values(&mesh, &exitance.iter().map(|b| b.as_dvec3()).collect::<Vec<_>>(), &boundary);
     conform(&mut vertex_exitance, &hanging);
     let by_exitance = variation(&mesh, &exitance, &vertex_exitance, None);
     let by_irradiance = irradiance_variation(&mesh, &exitance, &boundary, &hanging);
@@ -196,12 +199,84 @@ fn a_textured_floor_is_split_at_a_shadow_boundary_not_at_its_texture() {
         elements_to_split(&mesh, &flat, &irradiance_variation(&mesh, &flat, &boundary, &[]), 0.1, 0.05, 0.01, &all);
     assert!(by_irradiance.iter().all(|&s| !s), "flat light: nothing to split");
     // A shadow boundary.
-    let shadow = |x: f32| if x < 0.45 { 1.0 } else if x > 0.55 { 0.2 } else { 1.0 - 8.0 * (x - 0.45) };
+    let shadow = |x: f32| {
+        if x < 0.45 {
+            1.0
+        } else if x > 0.55 {
+            0.2
+        } else {
+            1.0 - 8.0 * (x - 0.45)
+        }
+    };
     let shaded = exitance_under(&shadow);
     let chosen =
         elements_to_split(&mesh, &shaded, &irradiance_variation(&mesh, &shaded, &boundary, &[]), 0.1, 0.05, 0.01, &all);
     for (e, c) in mesh.elements.centre.iter().enumerate() {
         assert_eq!(chosen[e], (c.x - 0.5).abs() < 0.1, "element at x = {}, z = {}", c.x, c.z);
+    }
+}
+
+/// A floor [−1, 1]² at z = 0 facing up, textured by an 8 × 8 checker of sRGB 200 and 60 (Kd 0.9, one
+/// texel per element at the 0.25 edge, so neighbouring elements' mean albedos differ 12-fold), under
+/// a lamp (Kd 0, Ke 1) at height 0.1 facing down over x in [−1.5, `lamp_x_max`], y in [−1.5, 1.5];
+/// solved by the adaptive method without refining (`adaptive_levels = 0`): the patch mesh and its
+/// solution.
+fn checker_under_lamp(lamp_x_max: f32) -> (Mesh, std::sync::Arc<radray::radiosity::Solution>) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let grey: Vec<u8> = (0..64).map(|k| if (k % 8 + k / 8) % 2 == 0 { 200 } else { 60 }).collect();
+    let image = image::GrayImage::from_raw(8, 8, grey).expect("size matches");
+    image.save(dir.path().join("c.png")).expect("write PNG");
+    let x = lamp_x_max;
+    let obj = format!(
+        "mtllib m.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv {x} -1.5 0.1\nv -1.5 -1.5 0.1\nv -1.5 1.5 0.1\n\
+         v {x} 1.5 0.1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl floor\nf 1/1 2/2 3/3 4/4\nusemtl lamp\nf 5 6 7 8\n"
+    );
+    std::fs::write(dir.path().join("m.obj"), obj).expect("write OBJ");
+    let mtl = "newmtl lamp\nKd 0 0 0\nKe 1 1 1\n\nnewmtl floor\nKd 0.9 0.9 0.9\nmap_Kd c.png\n";
+    std::fs::write(dir.path().join("m.mtl"), mtl).expect("write MTL");
+    let toml = "[camera]\neye = [0.0, 0.0, 0.05]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov_deg = 60.0\n\n\
+                [image]\nwidth = 8\nheight = 8\nsamples_per_pixel = 1\n\n[radiosity]\nmax_element_edge = 0.25\n\
+                method = \"adaptive\"\nadaptive_levels = 0\n\n[[mesh]]\nobj = \"m.obj\"\n";
+    std::fs::write(dir.path().join("scene.toml"), toml).expect("write scene");
+    let scene = scene::load(&dir.path().join("scene.toml")).expect("scene loads");
+    let mut stats = RunStats::default();
+    run::pass_one(&scene, None, &RunPhotons::default(), &Progress::hidden(), &mut stats).expect("pass one")
+}
+
+/// The split decisions on the floor of `checker_under_lamp` by the exitance and by the irradiance
+/// criterion (τ = 0.1, floor 5%), with the centres of the floor's elements.
+fn checker_decisions(lamp_x_max: f32) -> Vec<(Vec3, bool, bool)> {
+    let (mesh, solution) = checker_under_lamp(lamp_x_max);
+    let e = &mesh.elements;
+    let boundary = boundary_vertices(&mesh, &|_, _| None);
+    let all = vec![true; e.len()];
+    let exitance = &solution.element_exitance;
+    let by_exitance = variation(&mesh, exitance, &solution.vertex_exitance, None);
+    let by_exitance = elements_to_split(&mesh, exitance, &by_exitance, 0.1, 0.05, 0.01, &all);
+    let by_irradiance = irradiance_variation(&mesh, exitance, &boundary, &[]);
+    let by_irradiance = elements_to_split(&mesh, exitance, &by_irradiance, 0.1, 0.05, 0.01, &all);
+    let floor: Vec<usize> = (0..e.len()).filter(|&i| e.centre[i].z.abs() < 1e-6).collect();
+    assert_eq!(floor.len(), 64);
+    floor.into_iter().map(|i| (e.centre[i], by_exitance[i], by_irradiance[i])).collect()
+}
+
+/// End to end, through a real texture and solve: under a lamp wider than the floor (flat light, within
+/// 2% over the floor) the checker alone would split nearly every floor element by exitance, and the
+/// irradiance criterion splits none. With the lamp ending at x = 0 (a penumbra about ±0.2 wide) it
+/// splits the two columns beside the edge, every element of them, and nothing farther than 0.5 from it.
+#[test]
+fn a_checker_textured_floor_under_a_solved_lamp_is_split_at_the_lamps_edge_not_at_its_checks() {
+    let flat = checker_decisions(1.5);
+    let by_exitance = flat.iter().filter(|d| d.1).count();
+    assert!(by_exitance >= 48, "the checker splits {by_exitance} of 64 by exitance");
+    let by_irradiance: Vec<Vec3> = flat.iter().filter(|d| d.2).map(|d| d.0).collect();
+    assert!(by_irradiance.is_empty(), "flat light, split at {by_irradiance:?}");
+    for (centre, _, split) in checker_decisions(0.0) {
+        if centre.x.abs() < 0.25 {
+            assert!(split, "beside the lamp's edge, at {centre}: not split");
+        } else if centre.x.abs() > 0.5 {
+            assert!(!split, "far from the lamp's edge, at {centre}: split");
+        }
     }
 }
 

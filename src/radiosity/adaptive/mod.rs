@@ -1,9 +1,9 @@
 //! `method = "adaptive"`: the full matrix on a mesh refined where the solution needs it (Cohen,
 //! Greenberg, Immel and Brock 1986; Ashdown, *Radiosity: A Programmer's Perspective*, ch. 7). The
 //! scene is meshed into patches at `max_element_edge` and solved with hemicubes and the scene's
-//! solver; elements whose light varies across them (`criterion`: their irradiance, so that a texture's
-//! contrast does not count), and the elements facing them
-//! across concave edges, are split into four (`subdivide`); the finer mesh is solved again, up to
+//! solver; elements whose light varies across them (`criterion`: their irradiance, so that a
+//! texture's contrast does not count), and the elements facing them across concave edges, are split
+//! into four (`subdivide`); the finer mesh is solved again, up to
 //! `adaptive_levels` times. Each level keeps the form-factor rows of the elements it did not split
 //! (`substructure`), so it draws hemicubes only for the new children. Boundary vertices are
 //! extrapolated from the elements inside (`boundary_vertices`) and a hanging vertex takes its edge's
@@ -275,8 +275,7 @@ impl PassOneMethod for Adaptive {
             }
             // The criterion reads the light (irradiance), not the exitance a texture modulates.
             let exitance = &solved.solution.element_exitance;
-            let variation =
-                criterion::irradiance_variation(&solved.mesh, exitance, &solved.boundary, &solved.hanging);
+            let variation = criterion::irradiance_variation(&solved.mesh, exitance, &solved.boundary, &solved.hanging);
             let split = criterion::elements_to_split(
                 &solved.mesh,
                 exitance,
