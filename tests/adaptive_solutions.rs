@@ -309,7 +309,7 @@ fn auto_takes_the_adaptive_mesh_for_radiosity_mode_images_unless_auto_adaptive_s
     let specular = load("cornell_specular.toml");
     assert_eq!(auto_method_for(&specular, radiosity).0, MethodChoice::Matrix);
     // Textured surfaces take the adaptive mesh like the others (its split criterion reads irradiance,
-    // not the exitance a texture modulates: textured_box 14% better than the uniform mesh at equal
+    // not the exitance a texture modulates: textured_box 12% better than the uniform mesh at equal
     // CPU-s), and the key still turns it off or on.
     let mut textured = load("rooms/textured_box.toml");
     let (choice, reason) = auto_method_for(&textured, radiosity);
