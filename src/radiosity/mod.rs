@@ -11,7 +11,6 @@ pub mod fingerprint;
 pub mod hemicube;
 pub mod hierarchical;
 pub mod hierarchy;
-pub mod irradiance;
 pub mod leaf_mesh;
 pub mod matrix;
 pub mod matrix_free;

@@ -7,10 +7,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use crate::mesh::Mesh;
-use crate::radiosity::adaptive::hanging::{conform, hanging_vertices};
-use crate::radiosity::adaptive::subdivide::EdgeMidpoints;
-use crate::radiosity::boundary_vertices::{boundary_vertices, vertex_values};
-use crate::radiosity::irradiance::element_irradiance;
+use crate::radiosity::boundary_vertices::{conforming_boundary, vertex_values};
 use crate::radiosity::Solution;
 use crate::scene::DirectMode;
 use crate::transport::SurfaceHit;
@@ -52,26 +49,23 @@ pub struct Diffuse<'a> {
 /// `Mesh::vertex_average`), with Hₑ = (Bₑ − Eₑ)/ρₑ the irradiance element e reflected in pass one
 /// (0 where ρₑ = 0), and the same for the direct part Hₑ,d = Bₑ,d/ρₑ. On a textured surface the
 /// elements' mean albedos differ, so interpolating B and dividing by one element's ρ̄ₑ would carry the
-/// neighbours' albedo into it; irradiance is smooth across them. On the uniform and adaptive meshes
-/// the vertices are made as the solution's exitance is: boundary vertices extrapolated
-/// (`boundary_vertices::vertex_values`, split edges cut at their midpoints) and an adaptive mesh's
-/// hanging vertices given their edge's value (`hanging::conform`, no T-vertex cracks); the
-/// hierarchy's leaf mesh keeps the plain means.
+/// neighbours' albedo into it; irradiance is smooth across them. On the uniform mesh the boundary
+/// vertices are extrapolated as the solution's exitance is (`boundary_vertices::vertex_values`); the
+/// adaptive and hierarchical meshes (T-vertices this step cannot see) keep the plain means.
 pub fn vertex_irradiance(mesh: &Mesh, solution: &Solution) -> (Vec<Vec3>, Vec<Vec3>) {
-    let total = element_irradiance(mesh, &solution.element_exitance, true);
-    let direct = element_irradiance(mesh, &solution.element_direct_exitance, false);
-    if solution.leaf_geometry.is_some() {
-        let boundary = vec![false; mesh.positions.len()];
-        return (vertex_values(mesh, &total, &boundary), vertex_values(mesh, &direct, &boundary));
-    }
-    // The element meshes (uniform, adaptive): the vertex step of their exitance, T-vertices included.
-    let midpoints = EdgeMidpoints::of(mesh);
-    let boundary = boundary_vertices(mesh, &|a, b| midpoints.get(a, b));
-    let hanging = hanging_vertices(mesh, &midpoints);
-    let (mut total, mut direct) = (vertex_values(mesh, &total, &boundary), vertex_values(mesh, &direct, &boundary));
-    conform(&mut total, &hanging);
-    conform(&mut direct, &hanging);
-    (total, direct)
+    let e = &mesh.elements;
+    let per_albedo = |value: Vec3, rho: Vec3| {
+        let f = |v: f32, r: f32| if r > 0.0 { v / r } else { 0.0 };
+        Vec3::new(f(value.x, rho.x), f(value.y, rho.y), f(value.z, rho.z))
+    };
+    let total: Vec<glam::DVec3> = (0..e.len())
+        .map(|i| per_albedo(solution.element_exitance[i] - e.emission[i], e.reflectance[i]).as_dvec3())
+        .collect();
+    let direct: Vec<glam::DVec3> =
+        (0..e.len()).map(|i| per_albedo(solution.element_direct_exitance[i], e.reflectance[i]).as_dvec3()).collect();
+    let uniform = solution.refinement.is_none() && solution.leaf_geometry.is_none();
+    let boundary = if uniform { conforming_boundary(mesh) } else { vec![false; mesh.positions.len()] };
+    (vertex_values(mesh, &total, &boundary), vertex_values(mesh, &direct, &boundary))
 }
 
 impl<'a> Diffuse<'a> {
