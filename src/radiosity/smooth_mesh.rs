@@ -249,12 +249,12 @@ impl ElementMesh for SmoothMesh<'_> {
         let n = self.positions.len();
         let (mut sum, mut weight) = (vec![DVec3::ZERO; n], vec![0.0f64; n]);
         let (mut buried_sum, mut buried_weight) = (vec![DVec3::ZERO; n], vec![0.0f64; n]);
-        for e in 0..self.element_count() {
+        for (e, &value) in element_values.iter().enumerate().take(self.element_count()) {
             let a = self.weight(e);
             let (sum, weight) =
                 if self.buried(e) { (&mut buried_sum, &mut buried_weight) } else { (&mut sum, &mut weight) };
             for v in self.corners(e).into_iter().filter(|&v| v != NONE) {
-                sum[v as usize] += element_values[e] * a;
+                sum[v as usize] += value * a;
                 weight[v as usize] += a;
             }
         }
