@@ -10,8 +10,8 @@ use std::path::Path;
 
 use glam::{DVec3, Vec3};
 use radray::mesh::Mesh;
-use radray::radiosity::boundary_vertices::conforming_boundary;
 use radray::radiosity::fingerprint::fingerprint;
+use radray::radiosity::smooth_mesh::SmoothMesh;
 use radray::radiosity::solution_file::{
     SolutionFileError, FILE_MAGIC, FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_REFINED_MESH,
 };
@@ -359,8 +359,8 @@ fn cornell_mesh() -> (SceneDescription, Mesh, System) {
 /// The validation cube solved by Gauss-Seidel to 1e-6 (`solver::solve_solution`, uniform mesh).
 fn gauss_seidel_solution(scene: &SceneDescription, mesh: &Mesh, system: &System) -> Solution {
     let gauss_seidel = params(SolverKind::GaussSeidel, 1e-6);
-    let boundary = conforming_boundary(mesh);
-    solver::solve_solution(mesh, &scene.materials, &system.ff, &gauss_seidel, &boundary, &mut |_, _| {})
+    let vertex_step = SmoothMesh::new(mesh);
+    solver::solve_solution(mesh, &scene.materials, &system.ff, &gauss_seidel, &vertex_step, &mut |_, _| {})
 }
 
 #[test]
@@ -553,7 +553,7 @@ fn scene_without_emitter_solves_to_black() {
             &scene.materials,
             &system.ff,
             &params(solver, 1e-6),
-            &conforming_boundary(&dark),
+            &SmoothMesh::new(&dark),
             &mut |_, _| {},
         );
         assert!(computed.stats.converged, "{solver:?}");

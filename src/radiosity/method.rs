@@ -6,7 +6,6 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use super::boundary_vertices::conforming_boundary;
 use super::fingerprint;
 use super::fingerprint::form_factor_key;
 use super::hierarchical::Hierarchical;
@@ -14,6 +13,7 @@ use super::hierarchy::{HierarchyError, LinkStructure};
 use super::matrix::{form_factors, FormFactors, PartialRows, RowPlan};
 use super::matrix_free;
 use super::resume::{self, Checkpointer, Resume, SceneKeys, ShardError};
+use super::smooth_mesh::SmoothMesh;
 use super::solution::Solution;
 use super::solver;
 use super::specular::{self, SpecularPaths};
@@ -602,9 +602,9 @@ impl FullMatrix {
             stage.set_position(iteration as u64);
             stage.set_message(format!("residual {residual:.2e}"));
         };
-        let boundary = conforming_boundary(mesh);
+        let vertex_step = SmoothMesh::new(mesh);
         let solution =
-            solver::solve_solution_until(mesh, &scene.materials, ff, &params, &boundary, &mut on_iteration, stop)?;
+            solver::solve_solution_until(mesh, &scene.materials, ff, &params, &vertex_step, &mut on_iteration, stop)?;
         stats.solve_seconds = start.elapsed().as_secs_f64();
         stats.solver = Some(self.name());
         stats.sweeps = solution.stats.iterations;
@@ -790,7 +790,7 @@ impl PassOneMethod for MatrixFree {
             &scene.materials,
             &solved.exitance,
             &solved.direct_exitance,
-            &conforming_boundary(&mesh),
+            &SmoothMesh::new(&mesh),
             solved.stats,
         );
         Ok(PassOne { mesh, solution, stats, reused_form_factors: false })

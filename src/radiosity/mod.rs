@@ -16,6 +16,8 @@ pub mod matrix;
 pub mod matrix_free;
 pub mod method;
 pub mod resume;
+pub mod smooth_mesh;
+pub mod smoothing_groups;
 pub mod solution;
 pub mod solution_file;
 pub mod solver;

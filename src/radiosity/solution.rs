@@ -6,9 +6,9 @@ use std::sync::Arc;
 use glam::{DVec3, Vec3};
 
 use super::adaptive::refinement::Refinement;
-use super::boundary_vertices::vertex_values;
 use super::fingerprint::fingerprint;
 use super::leaf_mesh::LeafGeometry;
+use super::smooth_mesh::SmoothMesh;
 use crate::mesh::Mesh;
 use crate::scene::{Material, SolverKind};
 
@@ -55,23 +55,23 @@ impl Solution {
     }
 
     /// A solution from per-element exitance and its direct part (however they were solved): adds the
-    /// vertex values (`boundary_vertices::vertex_values`, extrapolated at the vertices marked
-    /// `boundary`: `boundary_vertices::conforming_boundary` on the uniform mesh) and the fingerprint of
-    /// `mesh` and `materials`.
+    /// vertex values (`vertex_step`: `mesh` welded within its smoothing groups, `SmoothMesh::new`;
+    /// means inside a group, extrapolated on its outline) and the fingerprint of `mesh` and
+    /// `materials`.
     pub fn from_element_values(
         mesh: &Mesh,
         materials: &[Material],
         exitance: &[DVec3],
         direct: &[DVec3],
-        boundary: &[bool],
+        vertex_step: &SmoothMesh,
         stats: SolveStats,
     ) -> Solution {
         assert!(exitance.len() == mesh.elements.len() && direct.len() == mesh.elements.len());
         Solution {
             element_exitance: to_f32(exitance),
             element_direct_exitance: to_f32(direct),
-            vertex_exitance: vertex_values(mesh, exitance, boundary),
-            vertex_direct_exitance: vertex_values(mesh, direct, boundary),
+            vertex_exitance: vertex_step.vertex_values(exitance),
+            vertex_direct_exitance: vertex_step.vertex_values(direct),
             mesh_fingerprint: fingerprint(mesh, materials),
             stats,
             leaf_geometry: None,

@@ -7,7 +7,8 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use crate::mesh::Mesh;
-use crate::radiosity::boundary_vertices::{conforming_boundary, vertex_values};
+use crate::radiosity::boundary_vertices::vertex_values;
+use crate::radiosity::smooth_mesh::SmoothMesh;
 use crate::radiosity::Solution;
 use crate::scene::DirectMode;
 use crate::transport::SurfaceHit;
@@ -49,8 +50,9 @@ pub struct Diffuse<'a> {
 /// `Mesh::vertex_average`), with Hₑ = (Bₑ − Eₑ)/ρₑ the irradiance element e reflected in pass one
 /// (0 where ρₑ = 0), and the same for the direct part Hₑ,d = Bₑ,d/ρₑ. On a textured surface the
 /// elements' mean albedos differ, so interpolating B and dividing by one element's ρ̄ₑ would carry the
-/// neighbours' albedo into it; irradiance is smooth across them. On the uniform mesh the boundary
-/// vertices are extrapolated as the solution's exitance is (`boundary_vertices::vertex_values`); the
+/// neighbours' albedo into it; irradiance is smooth across them. On the uniform mesh the vertices
+/// are welded within smoothing groups and the outline extrapolated as the solution's exitance is
+/// (`SmoothMesh`); the
 /// adaptive and hierarchical meshes (T-vertices this step cannot see) keep the plain means.
 pub fn vertex_irradiance(mesh: &Mesh, solution: &Solution) -> (Vec<Vec3>, Vec<Vec3>) {
     let e = &mesh.elements;
@@ -64,7 +66,11 @@ pub fn vertex_irradiance(mesh: &Mesh, solution: &Solution) -> (Vec<Vec3>, Vec<Ve
     let direct: Vec<glam::DVec3> =
         (0..e.len()).map(|i| per_albedo(solution.element_direct_exitance[i], e.reflectance[i]).as_dvec3()).collect();
     let uniform = solution.refinement.is_none() && solution.leaf_geometry.is_none();
-    let boundary = if uniform { conforming_boundary(mesh) } else { vec![false; mesh.positions.len()] };
+    if uniform {
+        let vertex_step = SmoothMesh::new(mesh);
+        return (vertex_step.vertex_values(&total), vertex_step.vertex_values(&direct));
+    }
+    let boundary = vec![false; mesh.positions.len()];
     (vertex_values(mesh, &total, &boundary), vertex_values(mesh, &direct, &boundary))
 }
 

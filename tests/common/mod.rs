@@ -12,7 +12,7 @@ use glam::{vec3, DVec3, Vec3};
 use radray::accel::Accel;
 use radray::mesh::Mesh;
 use radray::progress::Progress;
-use radray::radiosity::boundary_vertices::{conforming_boundary, vertex_values};
+use radray::radiosity::smooth_mesh::SmoothMesh;
 use radray::radiosity::solution::{Solution, SolveStats};
 use radray::run::{self, RunStats};
 use radray::scene::{
@@ -130,12 +130,12 @@ pub fn cornell() -> SceneDescription {
 }
 
 /// A hand-made solution: per-element exitance and its direct part, vertex values as the solver makes
-/// them on the uniform mesh (`boundary_vertices::vertex_values`, in f64).
+/// them on the uniform mesh (`SmoothMesh::vertex_values`, in f64).
 pub fn solution(mesh: &Mesh, exitance: Vec<Vec3>, direct: Vec<Vec3>) -> Solution {
-    let boundary = conforming_boundary(mesh);
+    let vertex_step = SmoothMesh::new(mesh);
     let average = |values: &[Vec3]| -> Vec<Vec3> {
         let wide: Vec<DVec3> = values.iter().map(|v| v.as_dvec3()).collect();
-        vertex_values(mesh, &wide, &boundary)
+        vertex_step.vertex_values(&wide)
     };
     Solution {
         vertex_exitance: average(&exitance),

@@ -167,12 +167,12 @@ impl Adaptive {
         };
         stats.form_factor_nonzeros = ff.nnz();
         stats.form_factor_bytes = stats.form_factor_bytes.max(ff.memory_bytes());
-        // Boundary vertices extrapolated from the elements inside (`boundary_vertices`, with the split
-        // edges' midpoints so that a T-junction is not a boundary), then the hanging ones given their
-        // edge's value.
-        let boundary = super::boundary_vertices::boundary_vertices(&mesh, &|a, b| midpoints.get(a, b));
+        // The uniform mesh's vertex step (`SmoothMesh`: welded within smoothing groups, boundary
+        // vertices extrapolated from the elements inside, a split edge's midpoint found by position so
+        // that a T-junction is not a boundary), then the hanging ones given their edge's value.
+        let vertex_step = super::smooth_mesh::SmoothMesh::new(&mesh);
         let start = Instant::now();
-        let mut solution = solver::solve_solution(&mesh, &scene.materials, &ff, &params, &boundary, &mut |_, _| {});
+        let mut solution = solver::solve_solution(&mesh, &scene.materials, &ff, &params, &vertex_step, &mut |_, _| {});
         stats.solve_seconds += start.elapsed().as_secs_f64();
         stats.sweeps += solution.stats.iterations;
         stats.final_residual = solution.stats.residual_history.last().copied().unwrap_or(0.0);

@@ -1,6 +1,6 @@
 //! The leaf elements as a shared-vertex mesh with conforming per-vertex exitance: vertices are shared
-//! within a smoothing group (edge-connected input triangles of one material and side whose normals
-//! differ by less than about 25°). Vertex values come from the element meshes' one vertex step
+//! within a smoothing group (`smoothing_groups`: edge-connected input triangles of one material and
+//! side whose normals differ by less than about 25°). Vertex values come from the element meshes' one vertex step
 //! (`boundary_vertices::vertex_values`): inside a group the mean of the leaves around a vertex
 //! weighted by their open area (`Nodes::open_area`, the area-weighted mean when nothing rests on the
 //! surface), on the group's boundary the clamped linear extrapolation from the leaves inside; then a
@@ -14,9 +14,7 @@ use super::clusters::InputTriangles;
 use super::nodes::Nodes;
 use crate::mesh::NONE;
 use crate::radiosity::boundary_vertices::{self, ElementMesh};
-
-/// Normals of triangles in one smoothing group differ by less than acos(0.9) ≈ 25.8°.
-const SMOOTHING_COS: f32 = 0.9;
+use crate::radiosity::smoothing_groups::{self, Facet};
 
 /// Upper bound on the hanging-node sweeps of `leaf_mesh`: one per level of nested T-junctions (a leaf
 /// is at most a few dozen subdivisions below its input triangle).
@@ -150,47 +148,20 @@ fn key(p: Vec3) -> PositionKey {
     [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]
 }
 
-/// Union-find root with path halving.
-fn find(parent: &mut [u32], mut i: u32) -> u32 {
-    while parent[i as usize] != i {
-        let up = parent[parent[i as usize] as usize];
-        parent[i as usize] = up;
-        i = up;
-    }
-    i
-}
-
-/// Smoothing group of each input triangle (see module docs).
+/// Smoothing group of each input triangle (`smoothing_groups::smoothing_groups` over the input
+/// triangles, their corners compared bit for bit).
 pub fn smoothing_groups(nodes: &Nodes, inputs: &InputTriangles) -> Vec<u32> {
-    let count = inputs.node.len();
-    let mut parent: Vec<u32> = (0..count as u32).collect();
-    let mut first_on_edge: FxHashMap<(PositionKey, PositionKey), u32> = FxHashMap::default();
-    for i in 0..count {
+    smoothing_groups::smoothing_groups(inputs.node.len(), |i| {
         let n = inputs.node[i] as usize;
         let c = nodes.corners[n];
-        for e in 0..3 {
-            let (a, b) = (key(c[e]), key(c[(e + 1) % 3]));
-            let edge = if a <= b { (a, b) } else { (b, a) };
-            match first_on_edge.get(&edge) {
-                None => {
-                    first_on_edge.insert(edge, i as u32);
-                }
-                Some(&j) => {
-                    let m = inputs.node[j as usize] as usize;
-                    let compatible = inputs.material[i] == inputs.material[j as usize]
-                        && inputs.back[i] == inputs.back[j as usize]
-                        && nodes.normal[n].dot(nodes.normal[m]) > SMOOTHING_COS;
-                    if compatible {
-                        let (ri, rj) = (find(&mut parent, i as u32), find(&mut parent, j));
-                        if ri != rj {
-                            parent[ri.max(rj) as usize] = ri.min(rj);
-                        }
-                    }
-                }
-            }
+        Facet {
+            corners: [key(c[0]), key(c[1]), key(c[2]), [0; 3]],
+            corner_count: 3,
+            normal: nodes.normal[n],
+            material: inputs.material[i],
+            back: inputs.back[i],
         }
-    }
-    (0..count as u32).map(|i| find(&mut parent, i)).collect()
+    })
 }
 
 /// Leaf elements below `root` (depth-first order) with shared vertices and conforming vertex

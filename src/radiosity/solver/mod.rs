@@ -16,6 +16,7 @@ pub mod shooting;
 use glam::{DVec3, Vec3};
 
 use super::matrix::FormFactors;
+use super::smooth_mesh::SmoothMesh;
 use super::solution::Solution;
 use super::stats::SolveStats;
 use crate::mesh::Mesh;
@@ -180,18 +181,18 @@ pub fn solve_f64_until(
 }
 
 /// Pass one over a stored matrix: solves B = E + ρ·F·B with `params` (see `solve_f64`) and adds the
-/// direct part (`direct_exitance`), the vertex values (extrapolated at the vertices marked `boundary`:
-/// `Solution::from_element_values`) and the fingerprint of `mesh` and `materials` (the scene's
+/// direct part (`direct_exitance`), the vertex values (`vertex_step`, the mesh welded within its
+/// smoothing groups: `Solution::from_element_values`) and the fingerprint of `mesh` and `materials` (the scene's
 /// material table, which `mesh.elements.material` indexes). `on_iteration` sees every sweep or shot.
 pub fn solve_solution(
     mesh: &Mesh,
     materials: &[Material],
     ff: &FormFactors,
     params: &RadiosityParams,
-    boundary: &[bool],
+    vertex_step: &SmoothMesh,
     on_iteration: &mut dyn FnMut(u32, f64),
 ) -> Solution {
-    to_the_end(|stop| solve_solution_until(mesh, materials, ff, params, boundary, on_iteration, stop))
+    to_the_end(|stop| solve_solution_until(mesh, materials, ff, params, vertex_step, on_iteration, stop))
 }
 
 /// `solve_solution`, abandoned (`None`) as soon as `stop` returns true (polled before every sweep or
@@ -201,7 +202,7 @@ pub fn solve_solution_until(
     materials: &[Material],
     ff: &FormFactors,
     params: &RadiosityParams,
-    boundary: &[bool],
+    vertex_step: &SmoothMesh,
     on_iteration: &mut dyn FnMut(u32, f64),
     stop: &dyn Fn() -> bool,
 ) -> Option<Solution> {
@@ -209,7 +210,7 @@ pub fn solve_solution_until(
     assert_eq!(ff.len(), e.len(), "one form-factor row per element");
     let (exitance, stats) = solve_f64_until(ff, &e.reflectance, &e.emission, &e.area, params, on_iteration, stop)?;
     let direct = direct_exitance(ff, &e.reflectance, &e.emission);
-    Some(Solution::from_element_values(mesh, materials, &exitance, &direct, boundary, stats))
+    Some(Solution::from_element_values(mesh, materials, &exitance, &direct, vertex_step, stats))
 }
 
 #[cfg(test)]

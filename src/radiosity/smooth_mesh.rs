@@ -1,0 +1,269 @@
+//! The uniform or adaptive `Mesh` as its vertex step sees it: elements grouped into smoothing groups
+//! (`smoothing_groups`), and within a group the vertices at one point welded into one. `Mesh` shares
+//! vertices only inside one scene surface, and every facet of a tessellated object (a `[[sphere]]`, a
+//! statue from an OBJ file) is its own surface: averaged and extrapolated per surface, its values
+//! jump at every facet edge and the object renders as flat bands. Welded, a vertex on a smooth facet
+//! edge takes the mean of the elements on both sides, and only a group's outline (a crease, a material
+//! change, an open edge) is extrapolated. A box's faces are groups of one surface each, so their
+//! vertex values do not change.
+
+use glam::{DVec3, Vec3};
+use rustc_hash::FxHashMap;
+
+use super::boundary_vertices::{self, ElementMesh};
+use super::smoothing_groups::{smoothing_groups, Facet};
+use crate::mesh::{Mesh, NONE};
+
+/// Points closer than this fraction of the mesh's extent (per axis) are one point: the mesher puts the
+/// grid points on an edge two facets share at their own interpolation of the corners, which agree to
+/// a few ulps, not bit for bit.
+const WELD_TOLERANCE: f32 = 1e-6;
+
+/// Points as ids, points within `tolerance` of each other (per axis) taking one id: a hash grid of
+/// cells ten tolerances wide, a point looked up in every cell its tolerance box touches.
+struct PointIds {
+    tolerance: f32,
+    cell: f32,
+    cells: FxHashMap<[i64; 3], Vec<u32>>,
+    points: Vec<Vec3>,
+}
+
+impl PointIds {
+    fn new(extent: f32) -> Self {
+        let tolerance = (extent * WELD_TOLERANCE).max(f32::MIN_POSITIVE);
+        PointIds { tolerance, cell: tolerance * 10.0, cells: FxHashMap::default(), points: Vec::new() }
+    }
+
+    fn cell_of(&self, x: f32) -> i64 {
+        (x / self.cell).floor() as i64
+    }
+
+    /// The id of a point within the tolerance of `p`, if any.
+    fn find(&self, p: Vec3) -> Option<u32> {
+        let t = self.tolerance;
+        let (lo, hi) = ((p - Vec3::splat(t)).to_array(), (p + Vec3::splat(t)).to_array());
+        for x in self.cell_of(lo[0])..=self.cell_of(hi[0]) {
+            for y in self.cell_of(lo[1])..=self.cell_of(hi[1]) {
+                for z in self.cell_of(lo[2])..=self.cell_of(hi[2]) {
+                    if let Some(ids) = self.cells.get(&[x, y, z]) {
+                        if let Some(&id) =
+                            ids.iter().find(|&&id| (self.points[id as usize] - p).abs().max_element() <= t)
+                        {
+                            return Some(id);
+                        }
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// The id of `p`: an existing point's within the tolerance, else a new one.
+    fn id(&mut self, p: Vec3) -> u32 {
+        if let Some(id) = self.find(p) {
+            return id;
+        }
+        let id = self.points.len() as u32;
+        self.points.push(p);
+        let key = [self.cell_of(p.x), self.cell_of(p.y), self.cell_of(p.z)];
+        self.cells.entry(key).or_default().push(id);
+        id
+    }
+}
+
+/// Per mesh surface (side): the first element of it, and its corners, the vertices only one of its
+/// elements uses (the corners of a grid or of a split grid; a vertex on a side or inside has two or
+/// more), at most four, in the order found.
+struct SurfaceOutlines {
+    element: Vec<u32>,
+    corners: Vec<Vec<u32>>,
+}
+
+fn surface_outlines(mesh: &Mesh) -> SurfaceOutlines {
+    let e = &mesh.elements;
+    let mut uses = vec![0u32; mesh.positions.len()];
+    for c in &e.corners {
+        for &v in c.iter().filter(|&&v| v != NONE) {
+            uses[v as usize] += 1;
+        }
+    }
+    let count = mesh.surface_source.len().max(e.surface.iter().map(|&s| s as usize + 1).max().unwrap_or(0));
+    let mut outline = SurfaceOutlines { element: vec![u32::MAX; count], corners: vec![Vec::new(); count] };
+    for (i, c) in e.corners.iter().enumerate() {
+        let s = e.surface[i] as usize;
+        if outline.element[s] == u32::MAX {
+            outline.element[s] = i as u32;
+        }
+        for &v in c.iter().filter(|&&v| v != NONE && uses[v as usize] == 1) {
+            outline.corners[s].push(v);
+        }
+    }
+    outline
+}
+
+/// Mesh surface s as a facet for `smoothing_groups`: its outline's corners as point ids, counter-
+/// clockwise about its normal (a surface whose outline is not 3 or 4 corners gets no edges and stays a
+/// group of its own).
+fn surface_facet(mesh: &Mesh, s: usize, outline: &SurfaceOutlines, point: &[u32]) -> Facet<u32> {
+    let e = &mesh.elements;
+    let first = outline.element[s];
+    if first == u32::MAX {
+        return Facet { corners: [u32::MAX; 4], corner_count: 0, normal: Vec3::ZERO, material: u32::MAX, back: false };
+    }
+    let first = first as usize;
+    let normal = e.normal[first];
+    let mut corners = outline.corners[s].clone();
+    let corner_count = if (3..=4).contains(&corners.len()) { corners.len() } else { 0 };
+    if corner_count == 4 {
+        // Counter-clockwise by angle about the centroid, in the plane of the normal.
+        let centre = corners.iter().map(|&v| mesh.positions[v as usize]).sum::<Vec3>() / 4.0;
+        let (u, w) = normal.any_orthonormal_pair();
+        let angle = |v: u32| {
+            let d = mesh.positions[v as usize] - centre;
+            d.dot(w).atan2(d.dot(u))
+        };
+        corners.sort_by(|&a, &b| angle(a).total_cmp(&angle(b)));
+    }
+    let mut ids = [u32::MAX; 4];
+    for (k, &v) in corners.iter().take(corner_count).enumerate() {
+        ids[k] = point[v as usize];
+    }
+    Facet {
+        corners: ids,
+        corner_count,
+        normal,
+        material: e.material[first],
+        back: mesh.surface_source.get(s).is_some_and(|&source| source as usize != s),
+    }
+}
+
+/// A `Mesh` with its vertices welded within smoothing groups (see module docs), as an `ElementMesh`.
+pub struct SmoothMesh<'a> {
+    mesh: &'a Mesh,
+    /// Per welded vertex: its position and its smoothing group.
+    positions: Vec<Vec3>,
+    /// Per mesh vertex: its welded vertex.
+    welded: Vec<u32>,
+    /// Per element: its smoothing group.
+    group: Vec<u32>,
+    /// Per welded vertex: it lies on its group's outline (`boundary_vertices::boundary_vertices`, an
+    /// edge cut where a vertex of its group sits at its midpoint: the adaptive mesh's T-junctions, and
+    /// a facet edge that its neighbour's finer grid splits).
+    boundary: Vec<bool>,
+}
+
+impl<'a> SmoothMesh<'a> {
+    pub fn new(mesh: &'a Mesh) -> SmoothMesh<'a> {
+        let (lo, hi) = mesh
+            .positions
+            .iter()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let mut points = PointIds::new(if mesh.positions.is_empty() { 0.0 } else { (hi - lo).max_element() });
+        let point: Vec<u32> = mesh.positions.iter().map(|&p| points.id(p)).collect();
+        let outline = surface_outlines(mesh);
+        let e = &mesh.elements;
+        let surface_group = smoothing_groups(mesh.surface_source.len(), |s| surface_facet(mesh, s, &outline, &point));
+        let group: Vec<u32> = e.surface.iter().map(|&s| surface_group[s as usize]).collect();
+        let mut vertex_group = vec![u32::MAX; mesh.positions.len()];
+        for (i, c) in e.corners.iter().enumerate() {
+            for &v in c.iter().filter(|&&v| v != NONE) {
+                vertex_group[v as usize] = group[i];
+            }
+        }
+        let mut welded_of: FxHashMap<(u32, u32), u32> = FxHashMap::default();
+        let mut positions = Vec::new();
+        let mut welded_group = Vec::new();
+        let welded: Vec<u32> = (0..mesh.positions.len())
+            .map(|v| {
+                *welded_of.entry((vertex_group[v], point[v])).or_insert_with(|| {
+                    positions.push(mesh.positions[v]);
+                    welded_group.push(vertex_group[v]);
+                    positions.len() as u32 - 1
+                })
+            })
+            .collect();
+        let mut smooth = SmoothMesh { mesh, positions, welded, group, boundary: Vec::new() };
+        let midpoint = |a: u32, b: u32| {
+            let mid = (smooth.positions[a as usize] + smooth.positions[b as usize]) * 0.5;
+            let m = *welded_of.get(&(welded_group[a as usize], points.find(mid)?))?;
+            (m != a && m != b).then_some(m)
+        };
+        let boundary = boundary_vertices::boundary_vertices(&smooth, &midpoint);
+        smooth.boundary = boundary;
+        smooth
+    }
+
+    /// Per mesh vertex: the vertex step's value (`boundary_vertices::vertex_values` over the welded
+    /// mesh: the area mean of the unburied elements around a vertex inside a smoothing group, the
+    /// clamped linear extrapolation on its outline).
+    pub fn vertex_values(&self, element_values: &[DVec3]) -> Vec<Vec3> {
+        let welded = boundary_vertices::vertex_values(self, element_values, &self.boundary);
+        self.welded.iter().map(|&w| welded[w as usize]).collect()
+    }
+
+    /// Number of smoothing groups (a box-like scene: one per surface side).
+    pub fn group_count(&self) -> usize {
+        let mut groups = self.group.clone();
+        groups.sort_unstable();
+        groups.dedup();
+        groups.len()
+    }
+}
+
+impl ElementMesh for SmoothMesh<'_> {
+    fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    fn element_count(&self) -> usize {
+        self.mesh.elements.len()
+    }
+
+    fn corners(&self, e: usize) -> [u32; 4] {
+        self.mesh.elements.corners[e].map(|v| if v == NONE { NONE } else { self.welded[v as usize] })
+    }
+
+    fn centre(&self, e: usize) -> Vec3 {
+        self.mesh.elements.centre[e]
+    }
+
+    fn normal(&self, e: usize) -> Vec3 {
+        self.mesh.elements.normal[e]
+    }
+
+    fn weight(&self, e: usize) -> f64 {
+        self.mesh.elements.area[e] as f64
+    }
+
+    fn surface(&self, e: usize) -> u32 {
+        self.group[e]
+    }
+
+    fn buried(&self, e: usize) -> bool {
+        self.mesh.element_buried.get(e).copied().unwrap_or(false)
+    }
+
+    /// `Mesh::vertex_average` over the welded vertices: the area mean of the unburied elements around
+    /// a vertex, of the buried ones where there are only those.
+    fn vertex_mean(&self, element_values: &[DVec3]) -> Vec<DVec3> {
+        let n = self.positions.len();
+        let (mut sum, mut weight) = (vec![DVec3::ZERO; n], vec![0.0f64; n]);
+        let (mut buried_sum, mut buried_weight) = (vec![DVec3::ZERO; n], vec![0.0f64; n]);
+        for (e, &value) in element_values.iter().enumerate().take(self.element_count()) {
+            let a = self.weight(e);
+            let (sum, weight) =
+                if self.buried(e) { (&mut buried_sum, &mut buried_weight) } else { (&mut sum, &mut weight) };
+            for v in self.corners(e).into_iter().filter(|&v| v != NONE) {
+                sum[v as usize] += value * a;
+                weight[v as usize] += a;
+            }
+        }
+        (0..n)
+            .map(|v| match (weight[v] > 0.0, buried_weight[v] > 0.0) {
+                (true, _) => sum[v] * (1.0 / weight[v]),
+                (false, true) => buried_sum[v] * (1.0 / buried_weight[v]),
+                (false, false) => sum[v],
+            })
+            .collect()
+    }
+}

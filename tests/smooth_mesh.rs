@@ -1,0 +1,102 @@
+//! The uniform mesh's vertex step across the facets of a tessellated object (`SmoothMesh`): on a
+//! `[[sphere]]`'s facets lit by a smooth field, the values at a facet edge are continuous (every copy
+//! of a vertex carries one value, close to the field) where the per-surface step jumped by the
+//! facets' difference; a box's faces (90° creases) and a material change keep their own values, bit
+//! for bit what the per-surface step gives.
+
+mod common;
+
+use glam::{DVec3, Vec3};
+use radray::mesh::Mesh;
+use radray::radiosity::boundary_vertices::{conforming_boundary, vertex_values};
+use radray::radiosity::smooth_mesh::SmoothMesh;
+use radray::scene::shapes::{box_faces, sphere_triangles};
+use radray::scene::{Material, Surface};
+
+fn mesh_of(surfaces: Vec<Surface>, materials: usize, edge: f32) -> Mesh {
+    let materials = (0..materials).map(|m| Material::diffuse(&format!("m{m}"), Vec3::splat(0.5))).collect();
+    Mesh::build(&common::scene(materials, surfaces), edge)
+}
+
+/// A smooth exitance field on the unit sphere: B = 1 + n·L with L the light direction (+y), so that
+/// every facet sees a different value.
+fn field(p: Vec3) -> f64 {
+    1.0 + p.normalize().y as f64
+}
+
+/// The per-surface step (`conforming_boundary` + `vertex_values`) and the smooth step on one mesh.
+fn both_steps(mesh: &Mesh, element: &[DVec3]) -> (Vec<Vec3>, Vec<Vec3>) {
+    (vertex_values(mesh, element, &conforming_boundary(mesh)), SmoothMesh::new(mesh).vertex_values(element))
+}
+
+/// Largest spread of the values of the mesh vertices at one point (the jump across facet edges), and
+/// the largest distance of a vertex value from the field there.
+fn jump_and_error(mesh: &Mesh, values: &[Vec3]) -> (f64, f64) {
+    let mut at_point: std::collections::HashMap<[i32; 3], (f64, f64)> = Default::default();
+    let mut error = 0.0f64;
+    for (p, v) in mesh.positions.iter().zip(values) {
+        let key = (*p * 1e4).round().as_ivec3().to_array();
+        let e = at_point.entry(key).or_insert((f64::MAX, f64::MIN));
+        e.0 = e.0.min(v.x as f64);
+        e.1 = e.1.max(v.x as f64);
+        error = error.max((v.x as f64 - field(*p)).abs());
+    }
+    (at_point.values().map(|(lo, hi)| hi - lo).fold(0.0, f64::max), error)
+}
+
+#[test]
+fn a_sphere_under_a_light_is_continuous_across_its_facet_edges() {
+    let surfaces: Vec<Surface> =
+        sphere_triangles(Vec3::ZERO, 1.0, 24).into_iter().map(|t| common::surface(t.to_vec(), 0, false)).collect();
+    // Elements larger than the facets: one element per facet, as tessellated objects usually mesh.
+    let mesh = mesh_of(surfaces, 1, 10.0);
+    let element: Vec<DVec3> = mesh.elements.centre.iter().map(|&c| DVec3::splat(field(c))).collect();
+    let (per_surface, smooth) = both_steps(&mesh, &element);
+    let (jump_before, _) = jump_and_error(&mesh, &per_surface);
+    let (jump_after, error_after) = jump_and_error(&mesh, &smooth);
+    // 24 segments: neighbouring facets' centres are 15° apart, B changes by up to ~0.26 between them.
+    assert!(jump_before > 0.1, "the per-surface step jumps at facet edges: {jump_before}");
+    assert_eq!(jump_after, 0.0, "one value per point across facet edges");
+    // The vertex mean of the facets around a point: within the field's change over one facet.
+    assert!(error_after < 0.05, "vertex values follow the smooth field: max error {error_after}");
+    assert_eq!(SmoothMesh::new(&mesh).group_count(), 1, "the sphere is one smoothing group");
+}
+
+#[test]
+fn subdivided_facets_weld_their_edge_grids() {
+    // Facets meshed into several elements each: the grid points the two facets put on their shared
+    // edge agree only to rounding, and still become one vertex.
+    let surfaces: Vec<Surface> =
+        sphere_triangles(Vec3::ZERO, 1.0, 16).into_iter().map(|t| common::surface(t.to_vec(), 0, false)).collect();
+    // 16 segments: facets 22.5° apart, inside the smoothing angle.
+    let mesh = mesh_of(surfaces, 1, 0.15);
+    assert!(mesh.elements.len() > 4 * 16 * 7, "facets are subdivided: {}", mesh.elements.len());
+    let element: Vec<DVec3> = mesh.elements.centre.iter().map(|&c| DVec3::splat(field(c))).collect();
+    let (per_surface, smooth) = both_steps(&mesh, &element);
+    let (jump_before, _) = jump_and_error(&mesh, &per_surface);
+    let (jump_after, _) = jump_and_error(&mesh, &smooth);
+    assert!(jump_after < 1e-6 && jump_before > 0.02, "jump {jump_before} -> {jump_after}");
+}
+
+#[test]
+fn box_faces_and_material_changes_keep_their_own_values() {
+    // A box (90° creases) whose top is cut into two coplanar halves of different materials.
+    let faces = box_faces(Vec3::ZERO, Vec3::ONE, false);
+    let mut surfaces: Vec<Surface> = faces.iter().take(3).map(|f| common::surface(f.to_vec(), 0, false)).collect();
+    let top = faces[3];
+    let mid = |a: Vec3, b: Vec3| (a + b) * 0.5;
+    surfaces.push(common::surface(vec![top[0], top[1], mid(top[1], top[2]), mid(top[0], top[3])], 0, false));
+    surfaces.push(common::surface(vec![mid(top[0], top[3]), mid(top[1], top[2]), top[2], top[3]], 1, false));
+    surfaces.extend(faces.iter().skip(4).map(|f| common::surface(f.to_vec(), 0, false)));
+    let mesh = mesh_of(surfaces, 2, 0.25);
+    // Any field, however it varies: the groups are the surfaces, so both steps agree bit for bit.
+    let element: Vec<DVec3> = mesh
+        .elements
+        .centre
+        .iter()
+        .map(|&c| DVec3::new(c.x as f64, (c.y * c.z) as f64, 1.0 + c.x as f64 * 0.3))
+        .collect();
+    let (per_surface, smooth) = both_steps(&mesh, &element);
+    assert_eq!(SmoothMesh::new(&mesh).group_count(), 7);
+    assert_eq!(per_surface, smooth);
+}
