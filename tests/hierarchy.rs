@@ -357,13 +357,12 @@ fn refinement_never_makes_the_error_estimate_grow() {
 /// of the brightest non-emitting surface for dim ones: the hierarchy's element links err ≤ 1% (the
 /// estimator test) and the hemicube's delta form factors +0.54/N² in sum (tests/form_factors.rs).
 ///
-/// Ignored: still missed. Measured at the default ε = 5e-3 (1.44 M links, 49k leaves; red channel,
-/// hierarchy / full matrix): the blocks' lit tops 0.99 and 0.99, floor 0.92, ceiling 0.89, back wall
-/// 0.94, red and green walls 0.96, block sides 0.83–0.96; worst at 246% of the bound. The gap is
-/// systematic (darker everywhere that indirect light dominates, direct-lit tops agree), and it does
-/// not close with ε (1e-2: 445%, 3e-2: 599%, at 0.7 M and 0.2 M links), so it is not the refinement
-/// tolerance: see the report of this session for what was ruled out (pass-one form-factor sums,
-/// near-link estimators, edge quadrature).
+/// Met since session 12 (squared six-bin weights, link-end Sobol nets, the near-link estimator exact
+/// in each sampled source element): every surface within its bound, the floor worst at 91% of it
+/// (red channel 0.400 against 0.420), the ceiling 0.290 against 0.301 (49%); 1.88 M links, 50k
+/// leaves. Until then it was ignored: at the default ε = 5e-3 (1.44 M links) the floor was 0.92 of
+/// the matrix, the ceiling 0.89, block sides 0.83–0.96, worst at 246% of the bound, and the gap did
+/// not close with ε (1e-2: 445%, 3e-2: 599%), so it was not the refinement tolerance.
 ///
 /// Session 5 (`examples/hierarchy_agreement`, 256² hemicubes): on the empty box, where every link is
 /// element to element and the estimator agrees with a 768-point quadrature within 0.01% and the
@@ -373,7 +372,6 @@ fn refinement_never_makes_the_error_estimate_grow() {
 /// pushed to members facing different ways, is fixed (oriented push, `gather::gather`): the short
 /// block's side facing the tall block went from 1.47–1.97 of the matrix to 1.08–1.24.
 #[test]
-#[ignore = "the hierarchy is 4-17% darker than the full matrix where indirect light dominates (see doc comment)"]
 fn hierarchy_agrees_with_the_full_matrix_solver_on_the_cornell_box() {
     use radray::mesh::Mesh;
     use radray::radiosity::{form_factors, solver};
@@ -566,7 +564,9 @@ fn two_rooms_through_a_wall(grid: u32) -> (SceneDescription, Vec<bool>) {
 /// irradiance was pushed to children behind the wall). Exact zero, not a tolerance: ray visibility
 /// through a closed wall is 0 whatever the sampling, so a correct solver adds exactly nothing.
 ///
-/// Ignored: still missed. The receiver-side visibility term (`links::push_spread`) cut the leak at
+/// Ignored: still missed, and worse since session 12's near-link estimator (exact in each sampled
+/// source element, brighter near links than the disk estimator's): 0.4295 W of 90.9 W at the preview
+/// threshold. Before it: the receiver-side visibility term (`links::push_spread`) cut the leak at
 /// the preview threshold from 0.151 W to 0.062 W (lit room 82.6 W; links 26k -> 40k) when it counted
 /// members facing away as unreached. Since the oriented push lights only facing members, the term
 /// counts only occlusion (V): 0.0641 W of 83.0 W on merged main (0.0522 W with the facing-away count,
@@ -576,7 +576,7 @@ fn two_rooms_through_a_wall(grid: u32) -> (SceneDescription, Vec<bool>) {
 /// visibility is partial" independent of the power threshold for cluster receivers, or a cluster
 /// push that distributes by each child's own visibility.
 #[test]
-#[ignore = "0.064 W of 83.0 W still leaks at the preview threshold (0.151 W before push_spread); see doc comment"]
+#[ignore = "0.43 W of 90.9 W leaks at the preview threshold (session 12; 0.064 W of 83.0 W before the exact near-link estimator); see doc comment"]
 fn light_does_not_leak_through_a_wall_into_a_dark_room() {
     let (scene, dark) = two_rooms_through_a_wall(4);
     for params in [HierarchyParams::preview(), HierarchyParams::default()] {
