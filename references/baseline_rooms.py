@@ -30,7 +30,7 @@ from timed import timed  # noqa: E402
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--radray", default=os.path.join(ROOT, "target", "release", "radray"))
-    ap.add_argument("--rooms", default="l_room,gap_room,alcove_hall,textured_box")
+    ap.add_argument("--rooms", default="l_room,gap_room,alcove_hall,textured_box,rotunda")
     ap.add_argument("--qualities", default="default,high")
     ap.add_argument("--out", default="/tmp/radray_baseline")
     ap.add_argument("--renders-only", action="store_true")

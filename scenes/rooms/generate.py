@@ -16,7 +16,10 @@ Rooms (unit: metres, y up):
   alcove_hall  a hall with concave corners: two alcoves, a wall niche with a sill, two pillars, a low
                ceiling beam, a ceiling light and coloured walls (colour bleeding);
   textured_box a Cornell-like box with a photo-like texture on the back wall (map_Kd with Kd 1), a
-               checker floor (Kd 0.8 x map_Kd) and a JPEG wood texture on the tall block.
+               checker floor (Kd 0.8 x map_Kd) and a JPEG wood texture on the tall block;
+  rotunda      an octagonal hall (four walls at 45 degrees, 8-gon floor and ceiling) lit by a lamp on a
+               diagonal wall, with a sphere on a turned plinth, a column and a torus: tessellated curved
+               objects carrying smooth vertex normals (OBJ vn).
 
 Conventions (as every radray scene): right-handed; every polygon is counter-clockwise seen from its
 front, and every surface is one-sided and faces into the room (room shells inwards, furniture
@@ -73,9 +76,10 @@ class Model:
     def material(self, name, **kw):
         self.materials[name] = kw
 
-    def face(self, obj, mat, pts, uvs=None, expect_normal=None):
+    def face(self, obj, mat, pts, uvs=None, expect_normal=None, normals=None):
         """A planar convex polygon, counter-clockwise seen from its front. `expect_normal`, if given, is
-        checked against the winding (guards every hand-written corner order)."""
+        checked against the winding (guards every hand-written corner order). `normals`, if given, are
+        per-corner smooth-shading normals (OBJ `vn`), for tessellated curved objects."""
         if expect_normal is not None:
             n = cross(sub(pts[1], pts[0]), sub(pts[2], pts[0]))
             assert dot(n, expect_normal) > 0, (obj, pts, expect_normal)
@@ -83,7 +87,8 @@ class Model:
         if key not in self.objects:
             self.objects[key] = (mat, [])
             self.order.append(key)
-        self.objects[key][1].append(([tuple(float(c) for c in p) for p in pts], uvs))
+        nrm = [tuple(float(c) for c in n) for n in normals] if normals else None
+        self.objects[key][1].append(([tuple(float(c) for c in p) for p in pts], uvs, nrm))
 
     def rect(self, obj, mat, o, u, v, uv_of=None):
         """Parallelogram o, o+u, o+u+v, o+v; its front normal is u x v."""
@@ -126,11 +131,11 @@ class Model:
             self.face(obj, mat, ring, quad_uv if uv else None, expect_normal=(0, -1, 0))
 
     def triangle_count(self):
-        return sum(len(p) - 2 for _, fs in self.objects.values() for p, _ in fs)
+        return sum(len(f[0]) - 2 for _, fs in self.objects.values() for f in fs)
 
     def write(self, folder, header):
         os.makedirs(folder, exist_ok=True)
-        vid, vlist, tid, tlist = {}, [], {}, []
+        vid, vlist, tid, tlist, nid, nlist = {}, [], {}, [], {}, []
 
         def vi(p):
             k = tuple(round(c, 6) for c in p)
@@ -146,12 +151,21 @@ class Model:
                 tlist.append(k)
             return tid[k]
 
+        def ni(n):
+            k = tuple(round(c, 6) for c in n)
+            if k not in nid:
+                nid[k] = len(nlist) + 1
+                nlist.append(k)
+            return nid[k]
+
         body = []
         for name in self.order:
             mat, faces = self.objects[name]
             body.append("\no %s\ng %s\nusemtl %s" % (name, name, mat))
-            for pts, uvs in faces:
-                if uvs:
+            for pts, uvs, nrm in faces:
+                if nrm:
+                    body.append("f " + " ".join("%d//%d" % (vi(p), ni(n)) for p, n in zip(pts, nrm)))
+                elif uvs:
                     body.append("f " + " ".join("%d/%d" % (vi(p), ti(t)) for p, t in zip(pts, uvs)))
                 else:
                     body.append("f " + " ".join(str(vi(p)) for p in pts))
@@ -163,6 +177,8 @@ class Model:
                 f.write("v %.6f %.6f %.6f\n" % p)
             for t in tlist:
                 f.write("vt %.6f %.6f\n" % t)
+            for n in nlist:
+                f.write("vn %.6f %.6f %.6f\n" % n)
             f.write("\n".join(body) + "\n")
         with open(os.path.join(folder, "scene.mtl"), "w") as f:
             f.write("# Kd diffuse reflectance (linear RGB), Ke emitted radiance; map_Kd is multiplied by Kd,\n"
@@ -516,7 +532,114 @@ def textured_box():
     return m, cam
 
 
+# ------------------------------------------------------------------------------- curved objects
+def oriented_face(model, obj, mat, pts, want, normals=None):
+    """A convex polygon whose corner order is chosen so that its front faces `want`."""
+    n = cross(sub(pts[1], pts[0]), sub(pts[2], pts[0]))
+    if dot(n, want) < 0:
+        pts = pts[::-1]
+        normals = normals[::-1] if normals else None
+    model.face(obj, mat, pts, expect_normal=want, normals=normals)
+
+
+def surface_of_revolution(model, obj, mat, point_normal, nu, nv):
+    """A tessellated smooth surface (u around, v along) with per-corner normals: point_normal(u, v) ->
+    (point, outward unit normal) for u, v in [0, 1]; quads, or triangles where two corners coincide
+    (the poles of a sphere). Fronts face along the normal."""
+    for i in range(nu):
+        for j in range(nv):
+            corners = [point_normal(i / nu, j / nv), point_normal((i + 1) / nu, j / nv),
+                       point_normal((i + 1) / nu, (j + 1) / nv), point_normal(i / nu, (j + 1) / nv)]
+            pts, nrm = [], []
+            for p, n in corners:
+                if not pts or max(abs(a - b) for a, b in zip(p, pts[-1])) > 1e-9:
+                    pts.append(p)
+                    nrm.append(n)
+            if max(abs(a - b) for a, b in zip(pts[0], pts[-1])) <= 1e-9:
+                pts.pop()
+                nrm.pop()
+            if len(pts) < 3:
+                continue
+            mean_n = tuple(sum(n[k] for n in nrm) for k in range(3))
+            oriented_face(model, obj, mat, pts, mean_n, nrm)
+
+
+def sphere(model, obj, mat, centre, radius, nu=32, nv=16):
+    def pn(u, v):
+        th, ph = 2 * math.pi * u, math.pi * v
+        n = (math.sin(ph) * math.cos(th), math.cos(ph), math.sin(ph) * math.sin(th))
+        return add(centre, tuple(radius * c for c in n)), n
+    surface_of_revolution(model, obj, mat, pn, nu, nv)
+
+
+def cylinder(model, obj, mat, base, radius, height, nu=24):
+    """An uncapped vertical cylinder (a column from floor to ceiling needs no caps)."""
+    def pn(u, v):
+        th = 2 * math.pi * u
+        n = (math.cos(th), 0.0, math.sin(th))
+        return (base[0] + radius * n[0], base[1] + height * v, base[2] + radius * n[2]), n
+    surface_of_revolution(model, obj, mat, pn, nu, 1)
+
+
+def torus(model, obj, mat, centre, major, minor, nu=32, nv=16):
+    """A torus lying flat (axis +y)."""
+    def pn(u, v):
+        th, ph = 2 * math.pi * u, 2 * math.pi * v
+        n = (math.cos(ph) * math.cos(th), math.sin(ph), math.cos(ph) * math.sin(th))
+        ring = (major * math.cos(th), 0.0, major * math.sin(th))
+        return add(centre, add(ring, tuple(minor * c for c in n))), n
+    surface_of_revolution(model, obj, mat, pn, nu, nv)
+
+
+def rotunda():
+    m = room_model((0.42, 0.40, 0.38), wood=False)
+    m.material("orange", Kd=(0.70, 0.32, 0.10))
+    m.material("stone", Kd=(0.62, 0.60, 0.56))
+    m.material("blue", Kd=(0.15, 0.25, 0.60))
+    m.material("plinth", Kd=(0.30, 0.45, 0.30))
+    m.material("lamp", Kd=(0, 0, 0), Ke=(26.0, 23.0, 19.0))
+    R, H = 3.0, 3.0  # wall midpoints at R, 3 m high
+    rc = R / math.cos(math.pi / 8)
+    corner = [(rc * math.cos(math.pi / 8 + k * math.pi / 4), rc * math.sin(math.pi / 8 + k * math.pi / 4))
+              for k in range(8)]
+    oriented_face(m, "floor", "floor", [(x, 0.0, z) for x, z in corner], (0, 1, 0))
+    oriented_face(m, "ceiling", "ceiling", [(x, H, z) for x, z in corner], (0, -1, 0))
+    lamp_wall, y0, y1, half = 1, 1.5, 2.1, 0.6  # the wall at azimuth 45 degrees; lamp 1.2 x 0.6 m
+    for k in range(8):
+        (ax, az), (bx, bz) = corner[k], corner[(k + 1) % 8]
+        inward = (-(ax + bx) / 2, 0.0, -(az + bz) / 2)
+
+        def band(t0, t1, lo, hi, mat):
+            pa = (ax + (bx - ax) * t0, az + (bz - az) * t0)
+            pb = (ax + (bx - ax) * t1, az + (bz - az) * t1)
+            oriented_face(m, "walls", mat, [(pa[0], lo, pa[1]), (pb[0], lo, pb[1]), (pb[0], hi, pb[1]),
+                                            (pa[0], hi, pa[1])], inward)
+
+        if k != lamp_wall:
+            band(0.0, 1.0, 0.0, H, "wall")
+            continue
+        w = math.hypot(bx - ax, bz - az)
+        t0, t1 = 0.5 - half / w, 0.5 + half / w
+        band(0.0, 1.0, 0.0, y0, "wall")
+        band(0.0, t0, y0, y1, "wall")
+        band(t0, t1, y0, y1, "lamp")
+        band(t1, 1.0, y0, y1, "wall")
+        band(0.0, 1.0, y1, H, "wall")
+    # a plinth turned 30 degrees carrying a smooth sphere, a column, a torus on the floor
+    m.oriented_box("plinth", "plinth", (0.6, 0.0, -0.4), (0.6, 0.5, 0.6), 30.0)
+    sphere(m, "sphere", "orange", (0.6, 0.95, -0.4), 0.45)
+    cylinder(m, "column", "stone", (-1.5, 0.0, 1.5), 0.25, H)
+    torus(m, "torus", "blue", (-0.9, 0.12, -0.3), 0.4, 0.12)
+    m.write(os.path.join(HERE, "rotunda"), "rotunda: octagonal hall, wall lamp, smooth sphere, column, torus")
+    eye, look = (0.9, 1.7, -2.6), (-0.6, 0.8, 0.9)
+    cam = {"eye": eye, "look_at": look, "up": (0.0, 1.0, 0.0), "vfov_deg": 66.0}
+    write_toml("rotunda", "An octagonal hall (walls at 45 degrees, 3 m high) lit by a lamp on a diagonal "
+               "wall; a smooth sphere\n# (OBJ vn) on a turned plinth, a column and a torus: curved, "
+               "tessellated objects with shading normals.", cam)
+    return m, cam
+
+
 if __name__ == "__main__":
-    for make in (l_room, gap_room, alcove_hall, textured_box):
+    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda):
         model, _ = make()
         print("%-12s %4d triangles, %d materials" % (make.__name__, model.triangle_count(), len(model.materials)))
