@@ -92,6 +92,10 @@ pub struct Mesh {
     /// Per element: buried under the back of a one-sided surface (`burial::buried_elements`), left out
     /// of `vertex_average`; empty when not computed (every element counts).
     pub element_buried: Vec<bool>,
+    /// For a mesh refined by splitting elements (the adaptive method's): the vertex made at the
+    /// midpoint of each split edge, keyed by the edge's end vertices (smaller index first), so that
+    /// later readers find its T-vertices; empty for a conforming mesh.
+    pub split_edge_midpoints: rustc_hash::FxHashMap<(u32, u32), u32>,
 }
 
 /// Texture coordinates at point `p` of a planar triangle or convex quad with corner uvs: for a

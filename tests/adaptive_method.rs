@@ -9,13 +9,16 @@ use std::path::Path;
 use glam::Vec3;
 use radray::mesh::Mesh;
 use radray::progress::Progress;
-use radray::radiosity::adaptive::criterion::{across_concave_edges, elements_to_split};
-use radray::radiosity::adaptive::hanging::{conform, hanging_vertices};
+use radray::radiosity::adaptive::criterion::{
+    across_concave_edges, elements_to_split, irradiance_variation, variation,
+};
+use radray::radiosity::adaptive::hanging::{conform, conforming_vertex_values, hanging_vertices};
 use radray::radiosity::adaptive::subdivide::{split, EdgeMidpoints};
 use radray::radiosity::adaptive::substructure::{kept_rows, new_indices};
 use radray::radiosity::boundary_vertices::{boundary_vertices, vertex_values};
 use radray::radiosity::hierarchy::form_factor::point_to_polygon;
 use radray::radiosity::matrix::FormFactors;
+use radray::radiosity::smooth_mesh::SmoothMesh;
 use radray::run::{self, RunStats};
 use radray::scene::{self, Camera, ImageSettings, Material, MethodChoice, RadiosityParams, RenderParams};
 use radray::scene::{SceneDescription, SourceLoc, Surface};
@@ -105,7 +108,8 @@ fn a_shadow_boundary_is_refined_where_the_solution_has_a_gradient_and_nowhere_el
     let element: Vec<Vec3> = mesh.elements.centre.iter().map(|c| exitance_at(c.x)).collect();
     let vertex = mesh.vertex_average(&element.iter().map(|v| v.as_dvec3()).collect::<Vec<_>>());
     let vertex: Vec<Vec3> = vertex.iter().map(|v| v.as_vec3()).collect();
-    let chosen = elements_to_split(&mesh, &element, &vertex, 0.1, 0.05, 0.01, &vec![true; element.len()]);
+    let delta = variation(&mesh, &element, &vertex, None);
+    let chosen = elements_to_split(&mesh, &element, &delta, 0.1, 0.05, 0.01, &vec![true; element.len()]);
     assert_eq!(mesh.elements.len(), 100);
     for (e, c) in mesh.elements.centre.iter().enumerate() {
         let near = (c.x - 0.5).abs() < 0.1;
@@ -113,8 +117,190 @@ fn a_shadow_boundary_is_refined_where_the_solution_has_a_gradient_and_nowhere_el
     }
     // A flat solution is never split.
     let flat = vec![Vec3::ONE; element.len()];
-    let none = elements_to_split(&mesh, &flat, &vec![Vec3::ONE; mesh.positions.len()], 0.1, 0.05, 0.01, &[true; 100]);
+    let flat_delta = variation(&mesh, &flat, &vec![Vec3::ONE; mesh.positions.len()], None);
+    let none = elements_to_split(&mesh, &flat, &flat_delta, 0.1, 0.05, 0.01, &[true; 100]);
     assert!(none.iter().all(|&s| !s));
+}
+
+/// Irradiance of a light boundary along x = 0.5 across the floor of a room corner (the floor y = 0 and
+/// the wall x = 0 meet along the z axis): 1 in the light (x < 0.4), a penumbra to 0.15 at x = 0.6,
+/// brighter towards z = 1 (gradient 0.5), and a dip to 0.6 within 0.15 of the corner line on both
+/// surfaces (floor x < 0.15, wall y < 0.15). Smooth, stepped and flat parts, so that some elements
+/// split and some do not.
+fn room_irradiance(p: Vec3) -> Vec3 {
+    let shadow = 1.0 - 0.85 * ((p.x - 0.4) / 0.2).clamp(0.0, 1.0);
+    let corner = if p.x.hypot(p.y) < 0.15 { 0.6 } else { 1.0 };
+    Vec3::new(1.0, 0.9, 0.7) * shadow * corner * (1.0 + 0.5 * p.z)
+}
+
+/// For a uniform albedo ρ over each surface (and no emission), Bₑ = ρ·Hₑ, and the vertex step is
+/// linear and positively homogeneous per channel, so the irradiance criterion scaled by ρ,
+/// ρ·|H_v − Hₑ|, is the exitance criterion |B_v − Bₑ| and every decision is the same. Checked on a
+/// floor and a wall of different coloured albedos meeting in a corner, with extrapolated boundary
+/// vertices and hanging vertices (one level already split), for thresholds from 0.02 to 0.5.
+#[test]
+fn the_irradiance_criterion_scaled_by_a_uniform_albedo_is_the_exitance_criterion() {
+    let wall = quad("wall", [Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 1.0), Vec3::new(0.0, 0.0, 1.0)]);
+    let coarse = mesh_of(vec![floor(), wall], 0.1);
+    let mut midpoints = EdgeMidpoints::default();
+    // Split beside the penumbra and along the corner line (the floor's first column, the wall's
+    // first row).
+    let chosen: Vec<bool> =
+        coarse.elements.centre.iter().map(|c| (c.x - 0.5).abs() < 0.1 || c.x.hypot(c.y) < 0.1).collect();
+    let mut mesh = split(&coarse, &chosen, &mut midpoints);
+    let hanging = hanging_vertices(&mesh, &midpoints);
+    assert!(!hanging.is_empty(), "the split leaves T-vertices");
+    let (floor_rho, wall_rho) = (Vec3::new(0.8, 0.5, 0.2), Vec3::new(0.3, 0.6, 0.9));
+    let e = &mut mesh.elements;
+    for i in 0..e.len() {
+        e.reflectance[i] = if e.normal[i].y > 0.5 { floor_rho } else { wall_rho };
+    }
+    let e = &mesh.elements;
+    let exitance: Vec<Vec3> = (0..e.len()).map(|i| e.reflectance[i] * room_irradiance(e.centre[i])).collect();
+    // Today's criterion: the exitance's own vertex step (as the solver makes `vertex_exitance`).
+    let vertex_step = SmoothMesh::new(&mesh);
+    let vertex_exitance =
+        conforming_vertex_values(&vertex_step, &exitance.iter().map(|b| b.as_dvec3()).collect::<Vec<_>>(), &hanging);
+    let by_exitance = variation(&mesh, &exitance, &vertex_exitance, None);
+    let by_irradiance = irradiance_variation(&mesh, &exitance, &vertex_step, &hanging);
+    let largest = by_exitance.iter().copied().fold(0.0f32, f32::max);
+    assert!(largest > 0.1, "the field varies: {largest}");
+    for (i, (x, h)) in by_exitance.iter().zip(&by_irradiance).enumerate() {
+        // f32 rounding of B/ρ, a mean and ρ·ΔH: a few ulps of values of order 1.
+        assert!((x - h).abs() <= 1e-6 * largest.max(1.0) * 8.0, "element {i}: exitance {x}, irradiance {h}");
+    }
+    let all = vec![true; exitance.len()];
+    for threshold in [0.02, 0.1, 0.2, 0.5] {
+        let a = elements_to_split(&mesh, &exitance, &by_exitance, threshold, 0.05, 0.001, &all);
+        let b = elements_to_split(&mesh, &exitance, &by_irradiance, threshold, 0.05, 0.001, &all);
+        let count = a.iter().filter(|&&s| s).count();
+        assert!(count > 0 && count < a.len(), "τ = {threshold}: {count} of {} split", a.len());
+        assert_eq!(a, b, "τ = {threshold}: the two criteria split different elements");
+    }
+}
+
+/// A checker of albedos 0.8 and 0.1, one square per element, on the 10 × 10 floor. Under flat light
+/// (H = 1) the exitance jumps eightfold between neighbours and the exitance criterion splits every
+/// element; the irradiance criterion splits none. With a shadow boundary at x = 0.5 (H = 1 for
+/// x < 0.45, 0.2 for x > 0.55, linear between: the element centres see a step from 1 to 0.2) it
+/// splits the two columns beside it, and on the floor's outline rows (z = 0.05, 0.95) also the next
+/// element on either side: their outline corners at x = 0.4 and 0.6 are extrapolated
+/// (`boundary_vertices::extrapolate`), and the penumbra element's least-squares slope through the
+/// step carries into them, H_v = 1.17 and 0.1 against their own 1 and 0.2 (17% and 50%, over
+/// τ = 10%): an interpolation error the image would show, whatever the albedo. Nothing else splits.
+#[test]
+fn a_textured_floor_is_split_at_a_shadow_boundary_not_at_its_texture() {
+    let mut mesh = floor_mesh(0.1);
+    let cell = |c: Vec3| ((c.x * 10.0).floor() + (c.z * 10.0).floor()) as i32 % 2 == 0;
+    for i in 0..mesh.elements.len() {
+        mesh.elements.reflectance[i] = Vec3::splat(if cell(mesh.elements.centre[i]) { 0.8 } else { 0.1 });
+    }
+    let vertex_step = SmoothMesh::new(&mesh);
+    let all = vec![true; mesh.elements.len()];
+    let rho = mesh.elements.reflectance.clone();
+    let exitance_under = |h: &dyn Fn(f32) -> f32| -> Vec<Vec3> {
+        mesh.elements.centre.iter().zip(&rho).map(|(c, r)| *r * h(c.x)).collect()
+    };
+    // Flat light.
+    let flat = exitance_under(&|_| 1.0);
+    let vertex = vertex_step.vertex_values(&flat.iter().map(|b| b.as_dvec3()).collect::<Vec<_>>());
+    let by_exitance = elements_to_split(&mesh, &flat, &variation(&mesh, &flat, &vertex, None), 0.1, 0.05, 0.01, &all);
+    assert!(by_exitance.iter().all(|&s| s), "the texture alone splits every element by exitance");
+    let by_irradiance =
+        elements_to_split(&mesh, &flat, &irradiance_variation(&mesh, &flat, &vertex_step, &[]), 0.1, 0.05, 0.01, &all);
+    assert!(by_irradiance.iter().all(|&s| !s), "flat light: nothing to split");
+    // A shadow boundary.
+    let shadow = |x: f32| {
+        if x < 0.45 {
+            1.0
+        } else if x > 0.55 {
+            0.2
+        } else {
+            1.0 - 8.0 * (x - 0.45)
+        }
+    };
+    let shaded = exitance_under(&shadow);
+    let chosen = elements_to_split(
+        &mesh,
+        &shaded,
+        &irradiance_variation(&mesh, &shaded, &vertex_step, &[]),
+        0.1,
+        0.05,
+        0.01,
+        &all,
+    );
+    for (e, c) in mesh.elements.centre.iter().enumerate() {
+        let outline_row = c.z < 0.1 || c.z > 0.9;
+        let expected = (c.x - 0.5).abs() < 0.1 || (outline_row && (c.x - 0.5).abs() < 0.2);
+        assert_eq!(chosen[e], expected, "element at x = {}, z = {}", c.x, c.z);
+    }
+}
+
+/// A floor [−1, 1]² at z = 0 facing up, textured by an 8 × 8 checker of sRGB 200 and 60 (Kd 0.9, one
+/// texel per element at the 0.25 edge, so neighbouring elements' mean albedos differ 12-fold), under
+/// a lamp (Kd 0, Ke 1) at height 0.05 facing down over x in [−1.5, `lamp_x_max`], y in [−1.5, 1.5];
+/// solved by the adaptive method without refining (`adaptive_levels = 0`): the patch mesh and its
+/// solution.
+fn checker_under_lamp(lamp_x_max: f32) -> (Mesh, std::sync::Arc<radray::radiosity::Solution>) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let grey: Vec<u8> = (0..64).map(|k| if (k % 8 + k / 8) % 2 == 0 { 200 } else { 60 }).collect();
+    let image = image::GrayImage::from_raw(8, 8, grey).expect("size matches");
+    image.save(dir.path().join("c.png")).expect("write PNG");
+    let x = lamp_x_max;
+    let obj = format!(
+        "mtllib m.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv {x} -1.5 0.05\nv -1.5 -1.5 0.05\nv -1.5 1.5 0.05\n\
+         v {x} 1.5 0.05\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl floor\nf 1/1 2/2 3/3 4/4\nusemtl lamp\nf 5 6 7 8\n"
+    );
+    std::fs::write(dir.path().join("m.obj"), obj).expect("write OBJ");
+    let mtl = "newmtl lamp\nKd 0 0 0\nKe 1 1 1\n\nnewmtl floor\nKd 0.9 0.9 0.9\nmap_Kd c.png\n";
+    std::fs::write(dir.path().join("m.mtl"), mtl).expect("write MTL");
+    let toml = "[camera]\neye = [0.0, 0.0, 0.05]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov_deg = 60.0\n\n\
+                [image]\nwidth = 8\nheight = 8\nsamples_per_pixel = 1\n\n[radiosity]\nmax_element_edge = 0.25\n\
+                method = \"adaptive\"\nadaptive_levels = 0\n\n[[mesh]]\nobj = \"m.obj\"\n";
+    std::fs::write(dir.path().join("scene.toml"), toml).expect("write scene");
+    let scene = scene::load(&dir.path().join("scene.toml")).expect("scene loads");
+    let mut stats = RunStats::default();
+    run::pass_one(&scene, None, &RunPhotons::default(), &Progress::hidden(), &mut stats).expect("pass one")
+}
+
+/// The split decisions on the floor of `checker_under_lamp` by the exitance and by the irradiance
+/// criterion (τ = 0.1, floor 5%), with the centres of the floor's elements.
+fn checker_decisions(lamp_x_max: f32) -> Vec<(Vec3, bool, bool)> {
+    let (mesh, solution) = checker_under_lamp(lamp_x_max);
+    let e = &mesh.elements;
+    let vertex_step = SmoothMesh::new(&mesh);
+    let all = vec![true; e.len()];
+    let exitance = &solution.element_exitance;
+    let by_exitance = variation(&mesh, exitance, &solution.vertex_exitance, None);
+    let by_exitance = elements_to_split(&mesh, exitance, &by_exitance, 0.1, 0.05, 0.01, &all);
+    let by_irradiance = irradiance_variation(&mesh, exitance, &vertex_step, &[]);
+    let by_irradiance = elements_to_split(&mesh, exitance, &by_irradiance, 0.1, 0.05, 0.01, &all);
+    let floor: Vec<usize> = (0..e.len()).filter(|&i| e.centre[i].z.abs() < 1e-6).collect();
+    assert_eq!(floor.len(), 64);
+    floor.into_iter().map(|i| (e.centre[i], by_exitance[i], by_irradiance[i])).collect()
+}
+
+/// End to end, through a real texture and solve: under a lamp wider than the floor (flat light, within
+/// 1% over the floor) the checker alone would split nearly every floor element by exitance, and the
+/// irradiance criterion splits none. With the lamp ending at x = 0 it splits the two columns beside
+/// the edge, every element of them, and nothing farther than 0.5 from it. Beyond its edge a lamp at
+/// height h lights the floor at distance d with irradiance ∝ (1 − d/√(d² + h²))/2 ≈ h²/4d²; at
+/// h = 0.05 that tail varies across the elements past 0.5 by under a third of the limit
+/// τ·f·B_ref (the 5% floor of the brightest exitance), so the light there is flat for the criterion.
+#[test]
+fn a_checker_textured_floor_under_a_solved_lamp_is_split_at_the_lamps_edge_not_at_its_checks() {
+    let flat = checker_decisions(1.5);
+    let by_exitance = flat.iter().filter(|d| d.1).count();
+    assert!(by_exitance >= 48, "the checker splits {by_exitance} of 64 by exitance");
+    let by_irradiance: Vec<Vec3> = flat.iter().filter(|d| d.2).map(|d| d.0).collect();
+    assert!(by_irradiance.is_empty(), "flat light, split at {by_irradiance:?}");
+    for (centre, _, split) in checker_decisions(0.0) {
+        if centre.x.abs() < 0.25 {
+            assert!(split, "beside the lamp's edge, at {centre}: not split");
+        } else if centre.x.abs() > 0.5 {
+            assert!(!split, "far from the lamp's edge, at {centre}: split");
+        }
+    }
 }
 
 /// Two quads side by side; the left one split twice at its right neighbour's edge. Every midpoint on

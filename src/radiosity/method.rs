@@ -267,9 +267,6 @@ pub fn auto_method_for_shards(scene: &SceneDescription) -> (MethodChoice, String
 struct UniformOutlook {
     cpu_seconds: f64,
     specular: bool,
-    /// Any material names a texture map (the adaptive split criterion compares exitance, which texture
-    /// contrast moves as much as light does).
-    textured: bool,
 }
 
 /// `Err(why)` when `auto` leaves the uniform mesh for the hierarchy (`auto_prefers_hierarchy`), else
@@ -295,7 +292,6 @@ fn uniform_outlook(scene: &SceneDescription) -> Result<Option<UniformOutlook>, S
     let mesh = Mesh::build(scene, params.max_element_edge);
     let estimate = matrix_estimate(scene, &mesh);
     let specular = specular::mesh_has_specular(&mesh, &scene.materials);
-    let textured = scene.materials.iter().any(|m| !m.textures.is_empty());
     let (limit, kind) = if specular {
         (AUTO_MATRIX_CPU_SECONDS_SPECULAR, " for a scene with mirrors or glass")
     } else {
@@ -307,7 +303,7 @@ fn uniform_outlook(scene: &SceneDescription) -> Result<Option<UniformOutlook>, S
             estimate.cpu_seconds
         ));
     }
-    Ok(Some(UniformOutlook { cpu_seconds: estimate.cpu_seconds, specular, textured }))
+    Ok(Some(UniformOutlook { cpu_seconds: estimate.cpu_seconds, specular }))
 }
 
 /// `Ok(why)` when `auto` takes the adaptive mesh for a scene whose uniform matrix fits (`outlook`)
@@ -315,10 +311,7 @@ fn uniform_outlook(scene: &SceneDescription) -> Result<Option<UniformOutlook>, S
 /// that reader (`AdaptiveSettings::auto_for`: the scene's key, else on for radiosity-mode images and
 /// off for final images and solution files), the matrix is stored (`store_form_factors`), the uniform
 /// mesh has no mirrors or glass (the adaptive levels before the last are solved without extended form
-/// factors, so their splits miss light through them), no surface is textured unless the scene's key
-/// asks (texture contrast moves the split criterion's exitance as much as light does: textured_box's
-/// adaptive mesh was 8% worse than the uniform mesh at equal CPU-s), and its hemicubes are predicted at
-/// most `AUTO_ADAPTIVE_CPU_SECONDS` (the adaptive method keeps no checkpoint, so it takes only scenes
+/// factors, so their splits miss light through them), and its hemicubes are predicted at most `AUTO_ADAPTIVE_CPU_SECONDS` (the adaptive method keeps no checkpoint, so it takes only scenes
 /// that solve in well under a minute).
 fn adaptive_choice(
     params: &RadiosityParams,
@@ -344,11 +337,6 @@ fn adaptive_choice(
     };
     if outlook.specular {
         return Err("mirrors or glass keep the uniform matrix (extended form factors on every level)".to_string());
-    }
-    if outlook.textured && params.adaptive.auto.is_none() {
-        return Err("textured surfaces keep the uniform matrix (texture contrast splits the adaptive mesh: \
-                    textured_box +8% relMSE at equal time; auto_adaptive = true opts in)"
-            .to_string());
     }
     if outlook.cpu_seconds > AUTO_ADAPTIVE_CPU_SECONDS {
         return Err(format!(

@@ -11,6 +11,7 @@ pub mod fingerprint;
 pub mod hemicube;
 pub mod hierarchical;
 pub mod hierarchy;
+pub mod irradiance;
 pub mod leaf_mesh;
 pub mod matrix;
 pub mod matrix_free;

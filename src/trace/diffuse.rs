@@ -7,7 +7,10 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use crate::mesh::Mesh;
+use crate::radiosity::adaptive::hanging::{conforming_vertex_values, hanging_vertices};
+use crate::radiosity::adaptive::subdivide::EdgeMidpoints;
 use crate::radiosity::boundary_vertices::vertex_values;
+use crate::radiosity::irradiance::element_irradiance;
 use crate::radiosity::smooth_mesh::SmoothMesh;
 use crate::radiosity::Solution;
 use crate::scene::DirectMode;
@@ -50,28 +53,25 @@ pub struct Diffuse<'a> {
 /// `Mesh::vertex_average`), with Hₑ = (Bₑ − Eₑ)/ρₑ the irradiance element e reflected in pass one
 /// (0 where ρₑ = 0), and the same for the direct part Hₑ,d = Bₑ,d/ρₑ. On a textured surface the
 /// elements' mean albedos differ, so interpolating B and dividing by one element's ρ̄ₑ would carry the
-/// neighbours' albedo into it; irradiance is smooth across them. On the uniform mesh the vertices
-/// are welded within smoothing groups and the outline extrapolated as the solution's exitance is
-/// (`SmoothMesh`); the
-/// adaptive and hierarchical meshes (T-vertices this step cannot see) keep the plain means.
+/// neighbours' albedo into it; irradiance is smooth across them. On the uniform and adaptive meshes
+/// the vertices are made as the solution's exitance is: welded within smoothing groups and the
+/// outline extrapolated (`SmoothMesh`, a split edge's midpoint not taken for a boundary), and an
+/// adaptive mesh's hanging vertices given their edge's value (`hanging::conform`, no T-vertex
+/// cracks; the uniform mesh has none); the hierarchy's leaf mesh keeps the plain means.
 pub fn vertex_irradiance(mesh: &Mesh, solution: &Solution) -> (Vec<Vec3>, Vec<Vec3>) {
-    let e = &mesh.elements;
-    let per_albedo = |value: Vec3, rho: Vec3| {
-        let f = |v: f32, r: f32| if r > 0.0 { v / r } else { 0.0 };
-        Vec3::new(f(value.x, rho.x), f(value.y, rho.y), f(value.z, rho.z))
-    };
-    let total: Vec<glam::DVec3> = (0..e.len())
-        .map(|i| per_albedo(solution.element_exitance[i] - e.emission[i], e.reflectance[i]).as_dvec3())
-        .collect();
-    let direct: Vec<glam::DVec3> =
-        (0..e.len()).map(|i| per_albedo(solution.element_direct_exitance[i], e.reflectance[i]).as_dvec3()).collect();
-    let uniform = solution.refinement.is_none() && solution.leaf_geometry.is_none();
-    if uniform {
-        let vertex_step = SmoothMesh::new(mesh);
-        return (vertex_step.vertex_values(&total), vertex_step.vertex_values(&direct));
+    let total = element_irradiance(mesh, &solution.element_exitance, true);
+    let direct = element_irradiance(mesh, &solution.element_direct_exitance, false);
+    if solution.leaf_geometry.is_some() {
+        let boundary = vec![false; mesh.positions.len()];
+        return (vertex_values(mesh, &total, &boundary), vertex_values(mesh, &direct, &boundary));
     }
-    let boundary = vec![false; mesh.positions.len()];
-    (vertex_values(mesh, &total, &boundary), vertex_values(mesh, &direct, &boundary))
+    // The element meshes (uniform, adaptive): the vertex step of their exitance, T-vertices included.
+    let vertex_step = SmoothMesh::new(mesh);
+    let hanging = hanging_vertices(mesh, &EdgeMidpoints::of(mesh));
+    (
+        conforming_vertex_values(&vertex_step, &total, &hanging),
+        conforming_vertex_values(&vertex_step, &direct, &hanging),
+    )
 }
 
 impl<'a> Diffuse<'a> {

@@ -2,8 +2,11 @@
 //! edge whose element on the other side was not split) takes its edge's interpolated value, the mean
 //! of the edge's two ends, so Gouraud shading is continuous across the edge and shows no crack.
 
+use glam::{DVec3, Vec3};
+
 use super::subdivide::EdgeMidpoints;
 use crate::mesh::Mesh;
+use crate::radiosity::smooth_mesh::SmoothMesh;
 
 /// One hanging vertex and the ends of the unsplit element edge it lies on (its value is their mean).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -50,4 +53,14 @@ where
         let (a, b) = h.ends;
         values[h.vertex as usize] = (values[a as usize] + values[b as usize]) * 0.5;
     }
+}
+
+/// The adaptive mesh's vertex step for any per-element quantity (exitance, irradiance): the uniform
+/// mesh's (`SmoothMesh::vertex_values`: means within smoothing groups, the outline extrapolated, a
+/// split edge's midpoint not taken for a boundary), then the `hanging` vertices given their edge's
+/// value (`conform`). With no hanging vertices it is the uniform mesh's step.
+pub fn conforming_vertex_values(vertex_step: &SmoothMesh, element_values: &[DVec3], hanging: &[Hanging]) -> Vec<Vec3> {
+    let mut vertex = vertex_step.vertex_values(element_values);
+    conform(&mut vertex, hanging);
+    vertex
 }

@@ -1,8 +1,9 @@
 //! `method = "adaptive"`: the full matrix on a mesh refined where the solution needs it (Cohen,
 //! Greenberg, Immel and Brock 1986; Ashdown, *Radiosity: A Programmer's Perspective*, ch. 7). The
 //! scene is meshed into patches at `max_element_edge` and solved with hemicubes and the scene's
-//! solver; elements whose solution varies across them (`criterion`), and the elements facing them
-//! across concave edges, are split into four (`subdivide`); the finer mesh is solved again, up to
+//! solver; elements whose light varies across them (`criterion`: their irradiance, so that a
+//! texture's contrast does not count), and the elements facing them across concave edges, are split
+//! into four (`subdivide`); the finer mesh is solved again, up to
 //! `adaptive_levels` times. Each level keeps the form-factor rows of the elements it did not split
 //! (`substructure`), so it draws hemicubes only for the new children. Boundary vertices are
 //! extrapolated from the elements inside (`boundary_vertices`) and a hanging vertex takes its edge's
@@ -39,8 +40,8 @@ use subdivide::EdgeMidpoints;
 
 /// Changes whenever the method refines or solves differently, so that a cached solution of an
 /// older revision is not taken for this one's (2: substructuring, extrapolated boundary vertices,
-/// refinement carried across concave edges).
-const REVISION: u64 = 2;
+/// refinement carried across concave edges; 3: the split criterion on irradiance).
+const REVISION: u64 = 3;
 
 /// Hemicube resolution the deciding levels never go below.
 const MIN_PROBE_RESOLUTION_PX: u32 = 32;
@@ -51,11 +52,13 @@ pub struct Adaptive {
     pub solver: SolverKind,
 }
 
-/// The solved mesh of one level, with its form factors.
+/// The solved mesh of one level, with its form factors and its hanging vertices (given their edge's
+/// value by its vertex step).
 struct Level {
     mesh: Mesh,
     solution: Solution,
     ff: Arc<FormFactors>,
+    hanging: Vec<hanging::Hanging>,
 }
 
 /// Mixed into level 0's form-factor key (`level_zero_key`), so that a batch never takes the patch
@@ -179,7 +182,7 @@ impl Adaptive {
         let hanging = hanging::hanging_vertices(&mesh, midpoints);
         hanging::conform(&mut solution.vertex_exitance, &hanging);
         hanging::conform(&mut solution.vertex_direct_exitance, &hanging);
-        Ok(Level { mesh, solution, ff })
+        Ok(Level { mesh, solution, ff, hanging })
     }
 }
 
@@ -269,11 +272,14 @@ impl PassOneMethod for Adaptive {
             if last {
                 break solved;
             }
-            let e = &solved.solution;
+            // The criterion reads the light (irradiance), not the exitance a texture modulates.
+            let exitance = &solved.solution.element_exitance;
+            let vertex_step = super::smooth_mesh::SmoothMesh::new(&solved.mesh);
+            let variation = criterion::irradiance_variation(&solved.mesh, exitance, &vertex_step, &solved.hanging);
             let split = criterion::elements_to_split(
                 &solved.mesh,
-                &e.element_exitance,
-                &e.vertex_exitance,
+                exitance,
+                &variation,
                 settings.threshold,
                 criterion::FLOOR,
                 min_edge,

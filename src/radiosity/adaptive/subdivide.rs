@@ -35,6 +35,11 @@ impl EdgeMidpoints {
         self.map.is_empty()
     }
 
+    /// The split edges a refined mesh carries (`Mesh::split_edge_midpoints`, set by `split`).
+    pub fn of(mesh: &Mesh) -> EdgeMidpoints {
+        EdgeMidpoints { map: mesh.split_edge_midpoints.clone() }
+    }
+
     /// The midpoint of edge (a, b), made (position and uv the mean of the ends: exact on a bilinear
     /// or affine edge) when the edge is split for the first time.
     fn vertex(&mut self, mesh: &mut Mesh, a: u32, b: u32) -> u32 {
@@ -162,6 +167,7 @@ pub fn split(mesh: &Mesh, split: &[bool], midpoints: &mut EdgeMidpoints) -> Mesh
             })
             .collect();
     }
+    out.split_edge_midpoints = midpoints.map.clone();
     out
 }
 
