@@ -20,9 +20,13 @@
 //! - Reflectances of 1 or more are clamped (see `material::clamp_albedo`, `clamp_energy`), one warning
 //!   per material naming the file, the material and the value.
 //! - `map_*` options (`-bm 1`, `-s 2 2`, …) are skipped with a warning; the rest of the line is the
-//!   file name (spaces allowed, `\` read as `/`), relative to the MTL's folder.
+//!   file name (spaces allowed, `\` read as `/`), relative to the MTL's folder; a name that is not
+//!   there as written (an absolute path from the exporter's machine, another letter case) is looked
+//!   for by its file name next to the MTL (`scene::locate`), with a warning.
+//! - `Tr 1` alone (no `d`, no transparent `illum`) is opaque: see `finish`.
 
 use super::{clamp_albedo, clamp_energy};
+use crate::scene::locate::locate;
 use crate::scene::{Material, MaterialTextures, SourceLoc, TextureMap};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -50,8 +54,18 @@ pub const DEFAULT_GLASS_IOR: f32 = 1.5;
 /// Reads and parses an MTL file.
 pub fn load(path: &Path) -> Result<MtlLibrary, MtlError> {
     let bytes = std::fs::read(path).map_err(|source| MtlError::Read { path: path.to_path_buf(), source })?;
-    // Exporters write Latin-1 names now and then; they are only names.
-    parse(path, &String::from_utf8_lossy(&bytes))
+    parse(path, &decode_text(&bytes))
+}
+
+/// The text of an OBJ or MTL file as exporters write it: a leading UTF-8 byte-order mark is dropped;
+/// a file that is not UTF-8 is read as Latin-1 (Windows exporters write names and comments in the
+/// machine's code page). Both files go through here, so a `usemtl` name matches its `newmtl`.
+pub fn decode_text(bytes: &[u8]) -> String {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    match std::str::from_utf8(bytes) {
+        Ok(text) => text.to_string(),
+        Err(_) => bytes.iter().map(|&b| b as char).collect(),
+    }
 }
 
 /// Statements as written, before `illum` and the clamps give them their meaning.
@@ -299,6 +313,17 @@ fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlErro
             Some(d)
         }
         (Some(d), None) => Some(d),
+        // 3ds Max, MeshLab and vcglib write `Tr` as opacity (= d): their opaque materials say `Tr 1`,
+        // which the usual reading (Tr = 1 − d) makes invisible. Alone, `Tr 1` is read their way.
+        (None, Some(tr)) if tr >= 1.0 && !transparent_model => {
+            warn(
+                library,
+                "`Tr 1` without `d` read as opaque (3ds Max and MeshLab write Tr as opacity); write `d 0` for a \
+                 fully transparent material"
+                    .into(),
+            );
+            None
+        }
         (None, Some(tr)) => Some(1.0 - tr),
         (None, None) => None,
     };
@@ -344,11 +369,15 @@ fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlErro
     if mirror_model && specular.max_element() <= 0.0 {
         warn(library, format!("illum {} asks for a mirror but Ks is 0: it will not reflect", raw.illum.unwrap_or(0)));
     }
-    let texture = |map: &Option<(String, usize)>, factor: Vec3| {
-        map.as_ref().map(|(file, line)| TextureMap {
-            path: dir.join(file),
-            factor,
-            source: SourceLoc { path: path.to_path_buf(), line: *line },
+    let mut substituted = Vec::new();
+    let mut texture = |map: &Option<(String, usize)>, factor: Vec3| {
+        map.as_ref().map(|(file, line)| {
+            let found = locate(dir, file);
+            if found.substituted {
+                substituted
+                    .push(format!("`{file}` (line {line}) not found as written; using {}", found.path.display()));
+            }
+            TextureMap { path: found.path, factor, source: SourceLoc { path: path.to_path_buf(), line: *line } }
         })
     };
     let ke = raw.ke.unwrap_or(Vec3::ZERO);
@@ -357,6 +386,9 @@ fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlErro
         opacity: texture(&raw.map_d, Vec3::ONE),
         emission: texture(&raw.map_ke, if ke.max_element() > 0.0 { ke } else { Vec3::ONE }),
     };
+    for note in substituted {
+        warn(library, note);
+    }
     // A textured material without Kd multiplies its texture by 1; should the texture be unreadable it
     // falls back to the grey that faces without a material get.
     let kd = raw.kd.unwrap_or(if textures.diffuse.is_some() { Vec3::splat(0.5) } else { Vec3::ZERO });
