@@ -333,6 +333,15 @@ fn a_huge_coordinate_is_an_error_with_file_and_line() {
 }
 
 #[test]
+fn a_primitive_beyond_the_coordinate_limit_is_an_error_not_a_panic() {
+    // 2·10¹⁸ wide at 10²⁵: a finite area, but bounds the BVH builder panicked on.
+    let quad = "[[quad]]\ncorners = [[1e25, 0, 0], [1.000001e25, 0, 0], [1.000001e25, 1e19, 0], [1e25, 1e19, 0]]\n\
+material = \"lamp\"\n";
+    let msg = error_of(&format!("{CAMERA}{LIGHT_AND_QUAD}{quad}"));
+    assert!(msg.contains("scene.toml:") && msg.contains("beyond"), "{msg}");
+}
+
+#[test]
 fn an_obj_without_faces_is_named_when_the_scene_is_empty() {
     let (_d, r) =
         parse_files(&[("scene.toml", &format!("{CAMERA}[[mesh]]\nobj = \"m.obj\"\n")), ("m.obj", "# empty\n")]);

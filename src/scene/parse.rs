@@ -370,6 +370,20 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
     for (source, count) in degenerate {
         warnings.push(format!("{}: skipped {count} degenerate (zero-area) face(s)", source.display()));
     }
+    // The OBJ reader refuses such coordinates with their line; `scale` and `translate` can still make
+    // them (the BVH builder panics on bounds near 1e25).
+    let beyond = |s: &&Surface| s.vertices.iter().any(|v| v.abs().max_element() as f64 > obj::MAX_COORDINATE);
+    if let Some(s) = surfaces.iter().find(beyond) {
+        return Err(SceneError::Invalid {
+            loc: s.source.clone(),
+            message: format!(
+                "a vertex of object `{}` lies beyond ±{:e} once scaled and moved ({:?})",
+                s.object,
+                obj::MAX_COORDINATE,
+                s.vertices.iter().map(|v| v.to_array()).collect::<Vec<_>>()
+            ),
+        });
+    }
     if surfaces.is_empty() {
         let why = if faceless.is_empty() { String::new() } else { format!(" ({} has no faces)", faceless.join(", ")) };
         return loc.error(
