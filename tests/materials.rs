@@ -149,16 +149,25 @@ newmtl glass\nKs 1 1 1\nNi 1.5\nTr 1\nillum 7\n",
 }
 
 #[test]
+fn a_nameless_newmtl_is_a_warning_with_its_line() {
+    let lib = parse("newmtl\nKd 0.5 0.5 0.5\nnewmtl a\nKd 0.25 0.25 0.25\n");
+    assert_eq!(material(&lib, "a").diffuse_reflectance, Vec3::splat(0.25));
+    let said: Vec<&String> = lib.warnings.iter().filter(|w| w.contains("without a name")).collect();
+    assert!(said.len() == 1 && said[0].contains("scene.mtl:1:"), "{:?}", lib.warnings);
+}
+
+#[test]
 fn texture_paths_from_the_exporters_machine_fall_back_to_the_file_next_to_the_mtl() {
     let (dir, r) = load_scene(
-        "newmtl wall\nKd 1 1 1\nmap_Kd C:\\Users\\bob\\proj\\maps\\Brick.PNG\n",
+        "newmtl wall\nKd 1 1 1\nmap_Kd C:\\Users\\bob\\proj\\maps\\Brick.PNG\nnewmtl wall2\nmap_Kd /home/bob/brick.png\n",
         &[("brick.png", &png_bytes(1, 1, &[128]))],
     );
     let s = r.expect("scene loads");
     let wall = s.materials.iter().find(|m| m.name == "wall").unwrap();
     assert_eq!(wall.textures.diffuse.as_ref().unwrap().path, dir.path().join("brick.png"));
     let said: Vec<&String> = s.warnings.iter().filter(|w| w.contains("not found as written")).collect();
-    assert!(said.len() == 1 && said[0].contains("m.mtl") && said[0].contains("line 6"), "{:?}", s.warnings);
+    // One warning per MTL file, however many maps were found that way.
+    assert!(said.len() == 1 && said[0].contains("m.mtl:6:") && said[0].contains("1 more"), "{:?}", s.warnings);
 }
 
 #[test]

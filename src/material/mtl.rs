@@ -92,6 +92,9 @@ pub fn parse(path: &Path, text: &str) -> Result<MtlLibrary, MtlError> {
     let mut ignored: Vec<String> = Vec::new();
     let mut ignored_options: Vec<String> = Vec::new();
     let mut current: Option<Raw> = None;
+    // `newmtl` lines without a name; texture paths found by file name (line, as written, found).
+    let mut nameless: Vec<usize> = Vec::new();
+    let mut found_elsewhere: Vec<(usize, String, PathBuf)> = Vec::new();
     let note = |list: &mut Vec<String>, what: &str| {
         if !list.iter().any(|x| x == what) {
             list.push(what.to_string());
@@ -107,10 +110,10 @@ pub fn parse(path: &Path, text: &str) -> Result<MtlLibrary, MtlError> {
         let lower = keyword.to_ascii_lowercase();
         if lower == "newmtl" {
             if rest.is_empty() {
-                return Err(fail("`newmtl` needs a material name".into()));
+                nameless.push(line_no);
             }
             if let Some(done) = current.take() {
-                finish(path, done, &mut library)?;
+                finish(path, done, &mut library, &mut found_elsewhere)?;
             }
             current = Some(Raw { name: rest.to_string(), ..Raw::default() });
             continue;
@@ -198,7 +201,26 @@ pub fn parse(path: &Path, text: &str) -> Result<MtlLibrary, MtlError> {
         }
     }
     if let Some(done) = current.take() {
-        finish(path, done, &mut library)?;
+        finish(path, done, &mut library, &mut found_elsewhere)?;
+    }
+    if let Some(first) = nameless.first() {
+        library.warnings.push(format!(
+            "{}:{first}: `newmtl` without a name ({} such line(s)): no `usemtl` can name what follows it",
+            path.display(),
+            nameless.len()
+        ));
+    }
+    // Exporters write every map of a file with the same foreign folder: one warning per file.
+    if let Some((line, written, found)) = found_elsewhere.first() {
+        let more = match found_elsewhere.len() {
+            1 => String::new(),
+            n => format!(" ({} more texture path(s) found the same way)", n - 1),
+        };
+        library.warnings.push(format!(
+            "{}:{line}: texture `{written}` not found as written; using {}{more}",
+            path.display(),
+            found.display()
+        ));
     }
     let names: Vec<&str> = library.materials.iter().map(|m| m.name.as_str()).collect();
     for (i, name) in names.iter().enumerate() {
@@ -297,7 +319,12 @@ fn map_file(args: &str, skipped: &mut dyn FnMut(&str)) -> String {
 }
 
 /// Gives a material's statements their meaning (see the module header) and applies the clamps.
-fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlError> {
+fn finish(
+    path: &Path,
+    raw: Raw,
+    library: &mut MtlLibrary,
+    found_elsewhere: &mut Vec<(usize, String, PathBuf)>,
+) -> Result<(), MtlError> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mirror_model = matches!(raw.illum, Some(3 | 5 | 8));
     let transparent_model = matches!(raw.illum, Some(4 | 6 | 7 | 9));
@@ -369,13 +396,11 @@ fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlErro
     if mirror_model && specular.max_element() <= 0.0 {
         warn(library, format!("illum {} asks for a mirror but Ks is 0: it will not reflect", raw.illum.unwrap_or(0)));
     }
-    let mut substituted = Vec::new();
     let mut texture = |map: &Option<(String, usize)>, factor: Vec3| {
         map.as_ref().map(|(file, line)| {
             let found = locate(dir, file);
             if found.substituted {
-                substituted
-                    .push(format!("`{file}` (line {line}) not found as written; using {}", found.path.display()));
+                found_elsewhere.push((*line, file.clone(), found.path.clone()));
             }
             TextureMap { path: found.path, factor, source: SourceLoc { path: path.to_path_buf(), line: *line } }
         })
@@ -386,9 +411,6 @@ fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlErro
         opacity: texture(&raw.map_d, Vec3::ONE),
         emission: texture(&raw.map_ke, if ke.max_element() > 0.0 { ke } else { Vec3::ONE }),
     };
-    for note in substituted {
-        warn(library, note);
-    }
     // A textured material without Kd multiplies its texture by 1; should the texture be unreadable it
     // falls back to the grey that faces without a material get.
     let kd = raw.kd.unwrap_or(if textures.diffuse.is_some() { Vec3::splat(0.5) } else { Vec3::ZERO });
