@@ -135,6 +135,42 @@ fn tr_is_one_minus_d_and_d_wins_when_they_disagree() {
 }
 
 #[test]
+fn tr_0_is_opaque_and_tr_1_alone_is_read_as_the_opacity_3ds_max_and_meshlab_write() {
+    let lib = parse(
+        "newmtl a\nKd 0.5 0.5 0.5\nTr 0\nnewmtl meshlab\nKd 0.5 0.5 0.5\nTr 1.000000\nillum 2\n\
+newmtl glass\nKs 1 1 1\nNi 1.5\nTr 1\nillum 7\n",
+    );
+    assert!(!material(&lib, "a").is_dielectric());
+    assert!(!material(&lib, "meshlab").is_dielectric());
+    let said: Vec<&String> = lib.warnings.iter().filter(|w| w.contains("`Tr 1`")).collect();
+    assert!(said.len() == 1 && said[0].contains("`meshlab`") && said[0].contains("scene.mtl"), "{:?}", lib.warnings);
+    // With a transparent illum model, Tr 1 keeps its usual meaning: fully transparent.
+    assert_relative_eq!(material(&lib, "glass").transmittance, 1.0);
+}
+
+#[test]
+fn a_nameless_newmtl_is_a_warning_with_its_line() {
+    let lib = parse("newmtl\nKd 0.5 0.5 0.5\nnewmtl a\nKd 0.25 0.25 0.25\n");
+    assert_eq!(material(&lib, "a").diffuse_reflectance, Vec3::splat(0.25));
+    let said: Vec<&String> = lib.warnings.iter().filter(|w| w.contains("without a name")).collect();
+    assert!(said.len() == 1 && said[0].contains("scene.mtl:1:"), "{:?}", lib.warnings);
+}
+
+#[test]
+fn texture_paths_from_the_exporters_machine_fall_back_to_the_file_next_to_the_mtl() {
+    let (dir, r) = load_scene(
+        "newmtl wall\nKd 1 1 1\nmap_Kd C:\\Users\\bob\\proj\\maps\\Brick.PNG\nnewmtl wall2\nmap_Kd /home/bob/brick.png\n",
+        &[("brick.png", &png_bytes(1, 1, &[128]))],
+    );
+    let s = r.expect("scene loads");
+    let wall = s.materials.iter().find(|m| m.name == "wall").unwrap();
+    assert_eq!(wall.textures.diffuse.as_ref().unwrap().path, dir.path().join("brick.png"));
+    let said: Vec<&String> = s.warnings.iter().filter(|w| w.contains("not found as written")).collect();
+    // One warning per MTL file, however many maps were found that way.
+    assert!(said.len() == 1 && said[0].contains("m.mtl:6:") && said[0].contains("1 more"), "{:?}", s.warnings);
+}
+
+#[test]
 fn tf_filters_what_d_lets_through() {
     let lib = parse("newmtl green_glass\nKd 0 0 0\nKs 1 1 1\nNi 1.5\nd 0\nTf 0.5 1 0.5\nillum 4\n");
     let g = material(&lib, "green_glass");

@@ -190,12 +190,163 @@ fn malformed_obj_names_file_and_line() {
     assert!(msg.contains("m.obj:4:"), "{msg}");
 }
 
+/// Writes `files` (name, bytes) into a fresh directory and parses `scene.toml` from it.
+fn parse_bytes(files: &[(&str, &[u8])]) -> (tempfile::TempDir, Result<scene::SceneDescription, SceneError>) {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in files {
+        let path = dir.path().join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, bytes).unwrap();
+    }
+    let result = scene::load(&dir.path().join("scene.toml"));
+    (dir, result)
+}
+
+/// A floor quad (material `flöor`, facing +y) and a lamp quad (material `lamp`, facing -y), as a
+/// plain UTF-8 exporter writes them.
+const PLAIN_OBJ: &str = "mtllib m.mtl\nv 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nv 0.3 1 0.3\nv 0.7 1 0.3\nv 0.7 1 0.7\n\
+v 0.3 1 0.7\nusemtl flöor\nf 1 2 3 4\nusemtl lamp\nf 5 6 7 8\n";
+const PLAIN_MTL: &str = "newmtl flöor\nKd 0.8 0.2 0.2\nnewmtl lamp\nKe 5 5 5\n";
+
+/// The materials each surface got, by name, in file order.
+fn material_names(s: &scene::SceneDescription) -> Vec<String> {
+    s.surfaces.iter().map(|f| s.materials[f.material as usize].name.clone()).collect()
+}
+
 #[test]
-fn missing_mtl_is_a_clear_error() {
+fn obj_and_mtl_as_windows_and_old_tools_write_them_read_like_the_plain_files() {
+    let scene = format!("{CAMERA}[[mesh]]\nobj = \"m.obj\"\n");
+    let (_d, plain) = parse_bytes(&[
+        ("scene.toml", scene.as_bytes()),
+        ("m.obj", PLAIN_OBJ.as_bytes()),
+        ("m.mtl", PLAIN_MTL.as_bytes()),
+    ]);
+    let plain = plain.unwrap();
+    assert_eq!(material_names(&plain), ["flöor", "lamp"]);
+    assert!(plain.warnings.is_empty(), "{:?}", plain.warnings);
+    let latin1 = |t: &str| t.chars().map(|c| c as u32 as u8).collect::<Vec<u8>>();
+    let bom = |t: &str| [&b"\xEF\xBB\xBF"[..], t.as_bytes()].concat();
+    let crlf_tabs = |t: &str| t.replace('\n', "\r\n").replace(' ', "\t");
+    let continued = PLAIN_OBJ.replace("f 1 2 3 4", "f 1 2 \\\n 3 4");
+    let cases: Vec<(&str, Vec<u8>, Vec<u8>)> = vec![
+        ("UTF-8 byte-order marks", bom(PLAIN_OBJ), bom(PLAIN_MTL)),
+        ("Latin-1 names", latin1(PLAIN_OBJ), latin1(PLAIN_MTL)),
+        ("CRLF and tabs", crlf_tabs(PLAIN_OBJ).into_bytes(), crlf_tabs(PLAIN_MTL).into_bytes()),
+        ("a face continued with \\", continued.into_bytes(), PLAIN_MTL.as_bytes().to_vec()),
+        (
+            "vertex colours",
+            PLAIN_OBJ.replace("v 0 0 0\n", "v 0 0 0 1 0 0\n").into_bytes(),
+            PLAIN_MTL.as_bytes().to_vec(),
+        ),
+    ];
+    for (what, obj, mtl) in cases {
+        let (_d, r) = parse_bytes(&[("scene.toml", scene.as_bytes()), ("m.obj", &obj), ("m.mtl", &mtl)]);
+        let s = r.unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert_eq!(material_names(&s), ["flöor", "lamp"], "{what}");
+        assert_eq!(s.surfaces[0].vertices, plain.surfaces[0].vertices, "{what}");
+        assert!(s.warnings.is_empty(), "{what}: {:?}", s.warnings);
+    }
+    // The spec's `mtllib a.mtl b.mtl`: both libraries are read.
+    let obj = PLAIN_OBJ.replace("mtllib m.mtl", "mtllib a.mtl b.mtl");
+    let (_d, r) = parse_bytes(&[
+        ("scene.toml", scene.as_bytes()),
+        ("m.obj", obj.as_bytes()),
+        ("a.mtl", "newmtl flöor\nKd 0.8 0.2 0.2\n".as_bytes()),
+        ("b.mtl", b"newmtl lamp\nKe 5 5 5\n"),
+    ]);
+    assert_eq!(material_names(&r.unwrap()), ["flöor", "lamp"]);
+}
+
+#[test]
+fn a_missing_material_library_is_a_warning_and_its_faces_are_grey() {
     let obj = "mtllib nothere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+    let (_d, r) =
+        parse_files(&[("scene.toml", &format!("{CAMERA}{LIGHT_AND_QUAD}[[mesh]]\nobj = \"m.obj\"\n")), ("m.obj", obj)]);
+    let s = r.unwrap();
+    let grey = s.surfaces.last().unwrap().material as usize;
+    assert_eq!(s.materials[grey].diffuse_reflectance, glam::Vec3::splat(0.5));
+    let about = |needle: &str| s.warnings.iter().filter(|w| w.contains(needle)).cloned().collect::<Vec<_>>();
+    assert_eq!(about("nothere.mtl").len(), 1, "{:?}", s.warnings);
+    assert!(about("nothere.mtl")[0].contains("m.obj:1:"), "{:?}", s.warnings);
+    assert_eq!(about("`usemtl a`").len(), 1, "{:?}", s.warnings);
+    assert!(about("`usemtl a`")[0].contains("m.obj:5:"), "{:?}", s.warnings);
+}
+
+#[test]
+fn a_nameless_or_undefined_usemtl_warns_once_with_its_line_and_its_faces_are_grey() {
+    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    for _ in 0..1000 {
+        obj.push_str("usemtl nosuch\nf 1 2 3\nusemtl\nf 1 2 3\n");
+    }
+    let (_d, r) = parse_files(&[
+        ("scene.toml", &format!("{CAMERA}{LIGHT_AND_QUAD}[[mesh]]\nobj = \"m.obj\"\n")),
+        ("m.obj", &obj),
+        ("m.mtl", "newmtl white\nKd 0.7 0.7 0.7\n"),
+    ]);
+    let s = r.unwrap();
+    let obj_warnings: Vec<&String> = s.warnings.iter().filter(|w| w.contains("m.obj")).collect();
+    assert_eq!(obj_warnings.len(), 3, "{obj_warnings:?}");
+    assert!(obj_warnings
+        .iter()
+        .any(|w| w.contains("m.obj:5:") && w.contains("`usemtl nosuch`") && w.contains("999 more")));
+    assert!(obj_warnings.iter().any(|w| w.contains("m.obj:7:") && w.contains("without a name")));
+    assert!(obj_warnings.iter().any(|w| w.contains("2000 face(s) have no material")));
+}
+
+#[test]
+fn a_concave_obj_face_is_ear_clipped_into_front_facing_triangles() {
+    // An L-shaped hexagon of area 0.75 facing +y, written from the corner next to its reflex corner:
+    // a fan from there puts back-facing triangles over the missing quarter.
+    let obj = "v 1 0 0.5\nv 0.5 0 0.5\nv 0.5 0 1\nv 0 0 1\nv 0 0 0\nv 1 0 0\nf 1 6 5 4 3 2\n";
+    let (_d, r) =
+        parse_files(&[("scene.toml", &format!("{CAMERA}{LIGHT_AND_QUAD}[[mesh]]\nobj = \"m.obj\"\n")), ("m.obj", obj)]);
+    let s = r.unwrap();
+    let triangles: Vec<_> = s.surfaces.iter().filter(|f| f.vertices.iter().all(|v| v.y == 0.0)).collect();
+    assert_eq!(triangles.len(), 4);
+    let normals: Vec<glam::Vec3> =
+        triangles.iter().map(|t| 0.5 * (t.vertices[1] - t.vertices[0]).cross(t.vertices[2] - t.vertices[0])).collect();
+    assert!(normals.iter().all(|n| n.y > 0.0), "{normals:?}");
+    let area: f32 = normals.iter().map(|n| n.y).sum();
+    assert!((area - 0.75).abs() < 1e-6, "{area}");
+}
+
+#[test]
+fn unusable_normals_are_dropped_and_lines_and_points_are_not_faces() {
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn nan 0 1\nvn 0 0 1\nf 1//1 2//3 3//3\nf 1//2 2//3 3//3\n\
+f 1//3 2//3 3//3\nl 1 2 3\np 1\n";
+    let (_d, r) =
+        parse_files(&[("scene.toml", &format!("{CAMERA}{LIGHT_AND_QUAD}[[mesh]]\nobj = \"m.obj\"\n")), ("m.obj", obj)]);
+    let s = r.unwrap();
+    let from_obj: Vec<_> = s.surfaces.iter().filter(|f| f.source.path.ends_with("m.obj")).collect();
+    assert_eq!(from_obj.len(), 3);
+    let kept: Vec<bool> = from_obj.iter().map(|f| f.shading_normals.is_some()).collect();
+    assert_eq!(kept, [false, false, true]);
+    assert_eq!(s.warnings.iter().filter(|w| w.contains("2 face(s) name a zero-length or non-finite `vn`")).count(), 1);
+}
+
+#[test]
+fn a_huge_coordinate_is_an_error_with_file_and_line() {
+    let obj = "v 0 0 0\nv 1 0 0\nv 1e30 1 0\nf 1 2 3\n";
     let (_d, r) = parse_files(&[("scene.toml", &format!("{CAMERA}[[mesh]]\nobj = \"m.obj\"\n")), ("m.obj", obj)]);
     let msg = r.unwrap_err().to_string();
-    assert!(msg.contains("m.obj") && msg.contains("material"), "{msg}");
+    assert!(msg.contains("m.obj:3:") && msg.contains("1e30"), "{msg}");
+}
+
+#[test]
+fn a_primitive_beyond_the_coordinate_limit_is_an_error_not_a_panic() {
+    // 2·10¹⁸ wide at 10²⁵: a finite area, but bounds the BVH builder panicked on.
+    let quad = "[[quad]]\ncorners = [[1e25, 0, 0], [1.000001e25, 0, 0], [1.000001e25, 1e19, 0], [1e25, 1e19, 0]]\n\
+material = \"lamp\"\n";
+    let msg = error_of(&format!("{CAMERA}{LIGHT_AND_QUAD}{quad}"));
+    assert!(msg.contains("scene.toml:") && msg.contains("beyond"), "{msg}");
+}
+
+#[test]
+fn an_obj_without_faces_is_named_when_the_scene_is_empty() {
+    let (_d, r) =
+        parse_files(&[("scene.toml", &format!("{CAMERA}[[mesh]]\nobj = \"m.obj\"\n")), ("m.obj", "# empty\n")]);
+    let msg = r.unwrap_err().to_string();
+    assert!(msg.contains("no surfaces") && msg.contains("m.obj has no faces"), "{msg}");
 }
 
 #[test]

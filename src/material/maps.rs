@@ -20,8 +20,10 @@ pub enum OpacityChannel {
 
 /// A texture map that could not be used: the material keeps its constant.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("material `{material}`: {statement}: {error}; using its {fallback} instead")]
+#[error("{location}: material `{material}`: {statement}: {error}; using its {fallback} instead")]
 pub struct MapWarning {
+    /// The MTL line of the map statement.
+    pub location: crate::scene::SourceLoc,
     pub material: String,
     /// `map_Kd`, `map_d` or `map_Ke`.
     pub statement: &'static str,
@@ -56,7 +58,13 @@ impl MaterialMaps {
                 (Ok(t), _) => Some((t, map.factor)),
                 (Err(error), first) => {
                     if first {
-                        warnings.push(MapWarning { material: m.name.clone(), statement, fallback, error });
+                        warnings.push(MapWarning {
+                            location: map.source.clone(),
+                            material: m.name.clone(),
+                            statement,
+                            fallback,
+                            error,
+                        });
                     }
                     None
                 }

@@ -20,9 +20,13 @@
 //! - Reflectances of 1 or more are clamped (see `material::clamp_albedo`, `clamp_energy`), one warning
 //!   per material naming the file, the material and the value.
 //! - `map_*` options (`-bm 1`, `-s 2 2`, …) are skipped with a warning; the rest of the line is the
-//!   file name (spaces allowed, `\` read as `/`), relative to the MTL's folder.
+//!   file name (spaces allowed, `\` read as `/`), relative to the MTL's folder; a name that is not
+//!   there as written (an absolute path from the exporter's machine, another letter case) is looked
+//!   for by its file name next to the MTL (`scene::locate`), with a warning.
+//! - `Tr 1` alone (no `d`, no transparent `illum`) is opaque: see `finish`.
 
 use super::{clamp_albedo, clamp_energy};
+use crate::scene::locate::locate;
 use crate::scene::{Material, MaterialTextures, SourceLoc, TextureMap};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -50,8 +54,18 @@ pub const DEFAULT_GLASS_IOR: f32 = 1.5;
 /// Reads and parses an MTL file.
 pub fn load(path: &Path) -> Result<MtlLibrary, MtlError> {
     let bytes = std::fs::read(path).map_err(|source| MtlError::Read { path: path.to_path_buf(), source })?;
-    // Exporters write Latin-1 names now and then; they are only names.
-    parse(path, &String::from_utf8_lossy(&bytes))
+    parse(path, &decode_text(&bytes))
+}
+
+/// The text of an OBJ or MTL file as exporters write it: a leading UTF-8 byte-order mark is dropped;
+/// a file that is not UTF-8 is read as Latin-1 (Windows exporters write names and comments in the
+/// machine's code page). Both files go through here, so a `usemtl` name matches its `newmtl`.
+pub fn decode_text(bytes: &[u8]) -> String {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    match std::str::from_utf8(bytes) {
+        Ok(text) => text.to_string(),
+        Err(_) => bytes.iter().map(|&b| b as char).collect(),
+    }
 }
 
 /// Statements as written, before `illum` and the clamps give them their meaning.
@@ -78,6 +92,9 @@ pub fn parse(path: &Path, text: &str) -> Result<MtlLibrary, MtlError> {
     let mut ignored: Vec<String> = Vec::new();
     let mut ignored_options: Vec<String> = Vec::new();
     let mut current: Option<Raw> = None;
+    // `newmtl` lines without a name; texture paths found by file name (line, as written, found).
+    let mut nameless: Vec<usize> = Vec::new();
+    let mut found_elsewhere: Vec<(usize, String, PathBuf)> = Vec::new();
     let note = |list: &mut Vec<String>, what: &str| {
         if !list.iter().any(|x| x == what) {
             list.push(what.to_string());
@@ -93,10 +110,10 @@ pub fn parse(path: &Path, text: &str) -> Result<MtlLibrary, MtlError> {
         let lower = keyword.to_ascii_lowercase();
         if lower == "newmtl" {
             if rest.is_empty() {
-                return Err(fail("`newmtl` needs a material name".into()));
+                nameless.push(line_no);
             }
             if let Some(done) = current.take() {
-                finish(path, done, &mut library)?;
+                finish(path, done, &mut library, &mut found_elsewhere)?;
             }
             current = Some(Raw { name: rest.to_string(), ..Raw::default() });
             continue;
@@ -184,7 +201,26 @@ pub fn parse(path: &Path, text: &str) -> Result<MtlLibrary, MtlError> {
         }
     }
     if let Some(done) = current.take() {
-        finish(path, done, &mut library)?;
+        finish(path, done, &mut library, &mut found_elsewhere)?;
+    }
+    if let Some(first) = nameless.first() {
+        library.warnings.push(format!(
+            "{}:{first}: `newmtl` without a name ({} such line(s)): no `usemtl` can name what follows it",
+            path.display(),
+            nameless.len()
+        ));
+    }
+    // Exporters write every map of a file with the same foreign folder: one warning per file.
+    if let Some((line, written, found)) = found_elsewhere.first() {
+        let more = match found_elsewhere.len() {
+            1 => String::new(),
+            n => format!(" ({} more texture path(s) found the same way)", n - 1),
+        };
+        library.warnings.push(format!(
+            "{}:{line}: texture `{written}` not found as written; using {}{more}",
+            path.display(),
+            found.display()
+        ));
     }
     let names: Vec<&str> = library.materials.iter().map(|m| m.name.as_str()).collect();
     for (i, name) in names.iter().enumerate() {
@@ -283,7 +319,12 @@ fn map_file(args: &str, skipped: &mut dyn FnMut(&str)) -> String {
 }
 
 /// Gives a material's statements their meaning (see the module header) and applies the clamps.
-fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlError> {
+fn finish(
+    path: &Path,
+    raw: Raw,
+    library: &mut MtlLibrary,
+    found_elsewhere: &mut Vec<(usize, String, PathBuf)>,
+) -> Result<(), MtlError> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mirror_model = matches!(raw.illum, Some(3 | 5 | 8));
     let transparent_model = matches!(raw.illum, Some(4 | 6 | 7 | 9));
@@ -299,6 +340,17 @@ fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlErro
             Some(d)
         }
         (Some(d), None) => Some(d),
+        // 3ds Max, MeshLab and vcglib write `Tr` as opacity (= d): their opaque materials say `Tr 1`,
+        // which the usual reading (Tr = 1 − d) makes invisible. Alone, `Tr 1` is read their way.
+        (None, Some(tr)) if tr >= 1.0 && !transparent_model => {
+            warn(
+                library,
+                "`Tr 1` without `d` read as opaque (3ds Max and MeshLab write Tr as opacity); write `d 0` for a \
+                 fully transparent material"
+                    .into(),
+            );
+            None
+        }
         (None, Some(tr)) => Some(1.0 - tr),
         (None, None) => None,
     };
@@ -344,11 +396,13 @@ fn finish(path: &Path, raw: Raw, library: &mut MtlLibrary) -> Result<(), MtlErro
     if mirror_model && specular.max_element() <= 0.0 {
         warn(library, format!("illum {} asks for a mirror but Ks is 0: it will not reflect", raw.illum.unwrap_or(0)));
     }
-    let texture = |map: &Option<(String, usize)>, factor: Vec3| {
-        map.as_ref().map(|(file, line)| TextureMap {
-            path: dir.join(file),
-            factor,
-            source: SourceLoc { path: path.to_path_buf(), line: *line },
+    let mut texture = |map: &Option<(String, usize)>, factor: Vec3| {
+        map.as_ref().map(|(file, line)| {
+            let found = locate(dir, file);
+            if found.substituted {
+                found_elsewhere.push((*line, file.clone(), found.path.clone()));
+            }
+            TextureMap { path: found.path, factor, source: SourceLoc { path: path.to_path_buf(), line: *line } }
         })
     };
     let ke = raw.ke.unwrap_or(Vec3::ZERO);

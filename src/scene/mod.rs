@@ -3,6 +3,7 @@
 
 pub mod instance;
 pub mod lint;
+pub mod locate;
 pub mod obj;
 pub mod overrides;
 pub mod parse;

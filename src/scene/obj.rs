@@ -3,10 +3,10 @@
 //! read by `material::mtl` (tobj's MTL reader panics on `Kd 1`, drops line numbers and keeps one value
 //! per unknown statement), and handed to tobj only as names, so that `usemtl` resolves as before.
 
+use super::locate::locate;
 use super::{Material, SourceLoc, Surface};
 use crate::material::mtl::{self, MtlError};
 use glam::{Vec2, Vec3};
-use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 
 /// What went wrong reading an OBJ or MTL file.
@@ -39,20 +39,72 @@ pub struct ObjContents {
 /// Texture coordinates of every face in file order: `Some` for a face whose every corner names a `vt`.
 type FaceUvs = Vec<Option<Vec<Vec2>>>;
 
-/// Checks the OBJ text line by line for what tobj would reject without saying where: unparsable
-/// numbers and face indices out of range. Returns the first problem with its line, or each face's
-/// texture coordinates (tobj loses them on objects whose faces only partly have `vt`).
-fn validate_text(path: &Path, text: &str) -> Result<FaceUvs, ObjError> {
+/// Largest coordinate magnitude radray accepts. Areas and squared distances are products of two
+/// coordinates, which must stay finite in f32 (max 3.4·10³⁸) with room to spare; exporters write
+/// 10³⁰ or FLT_MAX for unset positions.
+pub const MAX_COORDINATE: f64 = 1e18;
+
+/// A material name no library can define (it holds a NUL): what a `usemtl` without a name becomes for
+/// tobj, so its faces get the default material.
+const NO_MATERIAL: &str = "\u{0}none";
+
+/// An OBJ file's statements once read the way exporters write them, checked line by line.
+#[derive(Debug, Default)]
+struct Prepared {
+    /// The statements for tobj, one per source line (continued lines joined on the first, the
+    /// others left blank), words separated by single spaces, without `mtllib`.
+    text: String,
+    /// Each face's own texture coordinates (tobj loses them on objects whose faces only partly have
+    /// `vt`).
+    face_uvs: FaceUvs,
+    /// `mtllib` file names in file order, with their lines.
+    libraries: Vec<(String, usize)>,
+    /// `usemtl` names in file order, with their lines.
+    usemtl: Vec<(String, usize)>,
+    warnings: Vec<String>,
+}
+
+/// Reads OBJ text: joins `\` continuation lines, splits `mtllib` lists, turns a nameless `usemtl`
+/// into "no material", drops vertex colours, and checks what tobj would reject without saying where
+/// (unparsable numbers, coordinates beyond `MAX_COORDINATE`, face indices out of range). Returns the
+/// first problem with its line.
+fn prepare(path: &Path, text: &str) -> Result<Prepared, ObjError> {
     let (mut v, mut vt, mut vn) = (0i64, 0i64, 0i64);
     let mut texcoords: Vec<Vec2> = Vec::new();
-    let mut faces: FaceUvs = Vec::new();
-    for (k, line) in text.lines().enumerate() {
-        let fail =
-            |message: String| ObjError::Malformed { loc: SourceLoc { path: path.to_path_buf(), line: k + 1 }, message };
-        let line = line.split('#').next().unwrap_or("");
+    let mut out = Prepared::default();
+    let mut extra_numbers = 0usize;
+    let mut nameless_usemtl: Vec<usize> = Vec::new();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut k = 0usize;
+    while k < lines.len() {
+        let line_no = k + 1;
+        // A statement may continue over lines that end in `\`.
+        let mut statement = String::new();
+        let mut last = k;
+        loop {
+            let part = lines[last].trim_end();
+            match part.strip_suffix('\\') {
+                Some(head) if last + 1 < lines.len() => {
+                    statement.push_str(head);
+                    statement.push(' ');
+                    last += 1;
+                }
+                _ => {
+                    statement.push_str(part.strip_suffix('\\').unwrap_or(part));
+                    break;
+                }
+            }
+        }
+        k = last + 1;
+        let fail = |message: String| ObjError::Malformed {
+            loc: SourceLoc { path: path.to_path_buf(), line: line_no },
+            message,
+        };
+        let line = statement.split('#').next().unwrap_or("");
         let mut words = line.split_whitespace();
-        let Some(keyword) = words.next() else { continue };
+        let keyword = words.next().unwrap_or("");
         let args: Vec<&str> = words.collect();
+        let rest = line.trim_start().get(keyword.len()..).unwrap_or("").trim();
         let numbers = |want: usize| -> Result<(), ObjError> {
             if args.len() < want {
                 return Err(fail(format!("`{keyword}` needs {want} numbers, found {}", args.len())));
@@ -65,20 +117,41 @@ fn validate_text(path: &Path, text: &str) -> Result<FaceUvs, ObjError> {
             }
             Ok(())
         };
-        match keyword {
+        let tobj_line = match keyword {
             "v" => {
                 numbers(3)?;
+                if let Some(a) = args[..3].iter().find(|a| a.parse::<f64>().is_ok_and(|x| x.abs() > MAX_COORDINATE)) {
+                    return Err(fail(format!(
+                        "coordinate {a} is beyond ±{MAX_COORDINATE:e} (an unset position? radray's areas would overflow)"
+                    )));
+                }
                 v += 1;
+                // x y z, or x y z w; colours (x y z r g b, MeshLab, ZBrush) are dropped.
+                let keep = match args.len() {
+                    3 | 4 => args.len(),
+                    6 => 3,
+                    _ => {
+                        extra_numbers += 1;
+                        3
+                    }
+                };
+                format!("v {}", args[..keep].join(" "))
             }
             "vt" => {
                 numbers(1)?;
                 vt += 1;
                 let coordinate = |k: usize| args.get(k).and_then(|a| a.parse::<f32>().ok()).unwrap_or(0.0);
                 texcoords.push(Vec2::new(coordinate(0), coordinate(1)));
+                // A `vt u` alone gets v = 0, as the spec says; tobj wants two numbers.
+                format!("vt {} {}", coordinate(0), coordinate(1))
             }
             "vn" => {
-                numbers(3)?;
+                // A non-finite normal is dropped where it is used (the face keeps its flat normal).
+                if args.len() < 3 || args[..3].iter().any(|a| a.parse::<f32>().is_err()) {
+                    return Err(fail(format!("`vn` needs 3 numbers, found `{rest}`")));
+                }
                 vn += 1;
+                format!("vn {}", args[..3].join(" "))
             }
             "f" => {
                 if args.len() < 3 {
@@ -107,61 +180,143 @@ fn validate_text(path: &Path, text: &str) -> Result<FaceUvs, ObjError> {
                         uvs = None;
                     }
                 }
-                faces.push(uvs);
+                out.face_uvs.push(uvs);
+                format!("f {}", args.join(" "))
             }
-            _ => {}
+            "mtllib" => {
+                if !rest.is_empty() {
+                    out.libraries.push((rest.to_string(), line_no));
+                }
+                String::new()
+            }
+            "usemtl" if rest.is_empty() => {
+                nameless_usemtl.push(line_no);
+                format!("usemtl {NO_MATERIAL}")
+            }
+            "usemtl" => {
+                out.usemtl.push((rest.to_string(), line_no));
+                format!("usemtl {rest}")
+            }
+            "o" | "g" => format!("{keyword} {rest}"),
+            // Lines, points, smoothing groups, free-form statements: nothing radray draws.
+            _ => String::new(),
+        };
+        out.text.push_str(&tobj_line);
+        out.text.push('\n');
+        for _ in line_no..k {
+            out.text.push('\n');
         }
     }
-    Ok(faces)
+    if extra_numbers > 0 {
+        out.warnings.push(format!(
+            "{}: {extra_numbers} `v` line(s) have other than 3, 4 (x y z w) or 6 (x y z r g b) numbers; using x y z",
+            path.display()
+        ));
+    }
+    if let Some(first) = nameless_usemtl.first() {
+        out.warnings.push(format!(
+            "{}:{first}: `usemtl` without a name ({} such line(s)); the faces after it get grey Kd 0.5",
+            path.display(),
+            nameless_usemtl.len()
+        ));
+    }
+    Ok(out)
 }
 
-/// Loads an OBJ file and its MTL library.
-pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ObjError::Read { path: path.to_path_buf(), source })?;
-    let face_uvs = validate_text(path, &text)?;
-    let options = tobj::LoadOptions { single_index: true, triangulate: false, ignore_points: true, ignore_lines: true };
+/// Checks OBJ text as `prepare` does and returns each face's own texture coordinates.
+#[cfg(test)]
+fn validate_text(path: &Path, text: &str) -> Result<FaceUvs, ObjError> {
+    prepare(path, text).map(|p| p.face_uvs)
+}
+
+/// The libraries of `mtllib` lines, in order. A line may name several files (the spec's form) or one
+/// whose name has spaces: the whole rest of the line is tried first. A library that cannot be read
+/// is a warning (its materials are missing; faces naming them get the default grey); one that reads
+/// but is wrong is an error.
+fn load_libraries(path: &Path, prepared: &Prepared) -> Result<(Vec<mtl::MtlLibrary>, Vec<String>), ObjError> {
     let dir = path.parent().unwrap_or(Path::new("."));
-    // Libraries in `mtllib` order; tobj numbers materials in the same order.
-    let libraries: RefCell<Vec<mtl::MtlLibrary>> = RefCell::new(Vec::new());
-    let failure: RefCell<Option<ObjError>> = RefCell::new(None);
-    let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(text.as_bytes()), &options, |name| {
-        let mtl_path = dir.join(name);
-        match mtl::load(&mtl_path) {
-            Ok(library) => {
-                let names =
-                    library.materials.iter().map(|m| tobj::Material { name: m.name.clone(), ..Default::default() });
-                let names: Vec<tobj::Material> = names.collect();
-                // The last definition of a repeated name wins (the library warned about it).
-                let index = names.iter().enumerate().map(|(i, m)| (m.name.clone(), i)).collect();
-                libraries.borrow_mut().push(library);
-                Ok((names, index))
+    let mut libraries = Vec::new();
+    let mut warnings = Vec::new();
+    let mut seen: Vec<PathBuf> = Vec::new();
+    for (rest, line) in &prepared.libraries {
+        let whole = locate(dir, rest);
+        let names: Vec<&str> =
+            if whole.path.is_file() { vec![rest.as_str()] } else { rest.split_whitespace().collect() };
+        for name in names {
+            let found = locate(dir, name);
+            if seen.contains(&found.path) {
+                continue;
             }
-            Err(e) => {
-                let error = match e {
-                    MtlError::Read { path: mtl_path, source } => ObjError::Mtl {
-                        path: path.to_path_buf(),
-                        message: format!("material library `{}` cannot be read: {source}", mtl_path.display()),
-                    },
-                    other => ObjError::MtlContent(other),
-                };
-                failure.borrow_mut().get_or_insert(error);
-                Err(tobj::LoadError::MaterialParseError)
+            seen.push(found.path.clone());
+            if found.substituted {
+                warnings.push(format!(
+                    "{}:{line}: material library `{name}` not found as written; using {}",
+                    path.display(),
+                    found.path.display()
+                ));
+            }
+            match mtl::load(&found.path) {
+                Ok(library) => libraries.push(library),
+                Err(MtlError::Read { path: mtl_path, source }) => warnings.push(format!(
+                    "{}:{line}: material library `{}` cannot be read ({source}); faces using its materials get grey Kd 0.5",
+                    path.display(),
+                    mtl_path.display()
+                )),
+                Err(other) => return Err(ObjError::MtlContent(other)),
             }
         }
-    });
-    if let Some(error) = failure.into_inner() {
-        return Err(error);
     }
-    let (models, _) = loaded.map_err(|e| ObjError::Load { path: path.to_path_buf(), message: e.to_string() })?;
+    Ok((libraries, warnings))
+}
 
+/// Loads an OBJ file and its MTL libraries.
+pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
+    let bytes = std::fs::read(path).map_err(|source| ObjError::Read { path: path.to_path_buf(), source })?;
+    let prepared = prepare(path, &mtl::decode_text(&bytes))?;
+    let (libraries, library_warnings) = load_libraries(path, &prepared)?;
     let mut out = ObjContents::default();
-    for library in libraries.into_inner() {
+    out.warnings.extend(prepared.warnings.iter().cloned());
+    out.warnings.extend(library_warnings);
+    for library in libraries {
         out.materials.extend(library.materials);
         out.warnings.extend(library.warnings);
     }
+    // Names a `usemtl` gives that no library defines: one warning per name, at its first line.
+    let mut undefined: Vec<(&str, usize, usize)> = Vec::new();
+    for (name, line) in &prepared.usemtl {
+        if out.materials.iter().any(|m| &m.name == name) {
+            continue;
+        }
+        match undefined.iter_mut().find(|u| u.0 == name) {
+            Some(u) => u.2 += 1,
+            None => undefined.push((name, *line, 1)),
+        }
+    }
+    for (name, line, count) in undefined {
+        let more = if count > 1 { format!(" (and {} more `usemtl` line(s))", count - 1) } else { String::new() };
+        out.warnings.push(format!(
+            "{}:{line}: `usemtl {name}`: no material library defines it{more}; its faces get grey Kd 0.5",
+            path.display()
+        ));
+    }
+
+    let options = tobj::LoadOptions { single_index: true, triangulate: false, ignore_points: true, ignore_lines: true };
+    // tobj numbers materials in the order its loader returns them: all libraries, loaded above, are
+    // handed over at once by one `mtllib` line put first.
+    let names: Vec<tobj::Material> =
+        out.materials.iter().map(|m| tobj::Material { name: m.name.clone(), ..Default::default() }).collect();
+    // The last definition of a repeated name wins (the library warned about it).
+    let tobj_text = format!("mtllib radray\n{}", prepared.text);
+    let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(tobj_text.as_bytes()), &options, |_| {
+        Ok((names.clone(), names.iter().enumerate().map(|(i, m)| (m.name.clone(), i)).collect()))
+    });
+    let (models, _) = loaded.map_err(|e| ObjError::Load { path: path.to_path_buf(), message: e.to_string() })?;
+    let face_uvs = prepared.face_uvs;
+
     let mut default_material = None;
-    // Faces of a textured material that lack `vt`: one warning per file.
-    let mut untextured_faces = 0usize;
+    // Faces given the default grey; faces of a textured material that lack `vt`; faces whose `vn`
+    // cannot be a normal: one warning each per file.
+    let (mut grey_faces, mut untextured_faces, mut bad_normal_faces) = (0usize, 0usize, 0usize);
     let loc = SourceLoc { path: path.to_path_buf(), line: 0 };
     // tobj keeps the faces in file order, model after model; `face_uvs` can stand in for its texcoords
     // only when the counts agree.
@@ -177,11 +332,6 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
             Some(id) if id < out.materials.len() => id as u32,
             Some(id) => return Err(ObjError::UnknownMaterial { path: path.to_path_buf(), name: format!("#{id}") }),
             None => *default_material.get_or_insert_with(|| {
-                out.warnings.push(format!(
-                    "{}: object `{}` has no material; using grey Kd 0.5",
-                    path.display(),
-                    model.name
-                ));
                 out.materials.push(Material::diffuse("default", Vec3::splat(0.5)));
                 out.materials.len() as u32 - 1
             }),
@@ -217,7 +367,12 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
             let idx = &mesh.indices[start..start + arity as usize];
             start += arity as usize;
             let vertices: Vec<Vec3> = idx.iter().map(|&i| position(i)).collect();
-            let normals: Option<Vec<Vec3>> = idx.iter().map(|&i| normal(i)).collect();
+            let mut normals: Option<Vec<Vec3>> = idx.iter().map(|&i| normal(i)).collect();
+            // A zero-length or non-finite `vn` cannot bend anything: the face keeps its flat normal.
+            if normals.as_ref().is_some_and(|n| n.iter().any(|n| !(n.is_finite() && n.length_squared() > 0.0))) {
+                normals = None;
+                bad_normal_faces += 1;
+            }
             let uvs = if has_uv {
                 Some(idx.iter().map(|&i| uv(i)).collect::<Vec<Vec2>>())
             } else {
@@ -226,6 +381,9 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
             face += 1;
             if textured && uvs.is_none() {
                 untextured_faces += 1;
+            }
+            if mesh.material_id.is_none() {
+                grey_faces += 1;
             }
             out.surfaces.push(Surface {
                 vertices,
@@ -238,12 +396,27 @@ pub fn load(path: &Path, two_sided: bool) -> Result<ObjContents, ObjError> {
             });
         }
     }
+    if grey_faces > 0 {
+        out.warnings.push(format!(
+            "{}: {grey_faces} face(s) have no material (no `usemtl`, or one no library defines); using grey Kd 0.5",
+            path.display()
+        ));
+    }
     if untextured_faces > 0 {
         out.warnings.push(format!(
             "{}: {untextured_faces} face(s) of textured materials have no texture coordinates (`vt`); they use \
              their Kd",
             path.display()
         ));
+    }
+    if bad_normal_faces > 0 {
+        out.warnings.push(format!(
+            "{}: {bad_normal_faces} face(s) name a zero-length or non-finite `vn`; they use their flat normal",
+            path.display()
+        ));
+    }
+    if out.surfaces.is_empty() {
+        out.warnings.push(format!("{}: no faces (`f` statements); it adds nothing to the scene", path.display()));
     }
     Ok(out)
 }

@@ -327,6 +327,8 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
             surfaces.push(surface(tri.to_vec(), material, false, &name, inline(s.span())));
         }
     }
+    // OBJ files without a face, named if the scene ends up empty.
+    let mut faceless: Vec<String> = Vec::new();
     for m in &raw.mesh {
         let mv = m.get_ref();
         let obj_path = dir.join(mv.obj.get_ref());
@@ -348,6 +350,9 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
         };
         let translate = mv.translate.as_ref().map(|t| loc.finite3(t, "translate")).transpose()?.unwrap_or(Vec3::ZERO);
         let contents = obj::load(&obj_path, mv.two_sided)?;
+        if contents.surfaces.is_empty() {
+            faceless.push(obj_path.display().to_string());
+        }
         let base = materials.len() as u32;
         for material in &contents.materials {
             check_material(material).map_err(|(_, message)| SceneError::Invalid {
@@ -362,12 +367,29 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
 
     // Split what the mesher cannot take (polygons beyond quads, non-convex quads), drop zero-area faces.
     let (surfaces, degenerate) = normalise_surfaces(surfaces);
-    if degenerate > 0 {
-        warnings.push(format!("{}: skipped {degenerate} degenerate (zero-area) face(s)", path.display()));
+    for (source, count) in degenerate {
+        warnings.push(format!("{}: skipped {count} degenerate (zero-area) face(s)", source.display()));
+    }
+    // The OBJ reader refuses such coordinates with their line; `scale` and `translate` can still make
+    // them (the BVH builder panics on bounds near 1e25).
+    let beyond = |s: &&Surface| s.vertices.iter().any(|v| v.abs().max_element() as f64 > obj::MAX_COORDINATE);
+    if let Some(s) = surfaces.iter().find(beyond) {
+        return Err(SceneError::Invalid {
+            loc: s.source.clone(),
+            message: format!(
+                "a vertex of object `{}` lies beyond ±{:e} once scaled and moved ({:?})",
+                s.object,
+                obj::MAX_COORDINATE,
+                s.vertices.iter().map(|v| v.to_array()).collect::<Vec<_>>()
+            ),
+        });
     }
     if surfaces.is_empty() {
-        return loc
-            .error(0..0, "the scene has no surfaces: add a [[mesh]], [[quad]], [[triangle]], [[box]] or [[sphere]]");
+        let why = if faceless.is_empty() { String::new() } else { format!(" ({} has no faces)", faceless.join(", ")) };
+        return loc.error(
+            0..0,
+            format!("the scene has no surfaces{why}: add a [[mesh]], [[quad]], [[triangle]], [[box]] or [[sphere]]"),
+        );
     }
 
     let bounds = surfaces
