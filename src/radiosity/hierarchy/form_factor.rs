@@ -4,8 +4,10 @@
 //! - element ← element: Lambert's exact unoccluded point-to-polygon form factor, averaged over the
 //!   receiver's three-point quadrature rule, or a 48-point rule for near pairs (`element_to_element`),
 //!   times the ray visibility fraction;
-//! - far links with a cluster at either end: the isotropic-cluster point-to-point form factor of Sillion
-//!   (1995) with a six-bin projected-area model of the cluster (`cluster_form_factor`), times the ray
+//! - far links with a cluster at either end: the three-point rule over member pairs when the ends
+//!   hold at most 64 (`links::member_pair_form_factor`, `triangle_to_polygon`), else the
+//!   point-to-point form factor of Sillion (1995) with each cluster's exact projected area Σ A_i
+//!   max(0, n_i·ω) over its members (`Nodes::projected_area`; `cluster_form_factor`); times the ray
 //!   visibility fraction;
 //! - near links with a cluster end: see `links::near_form_factor` (leaf pairs or rays).
 
@@ -131,6 +133,15 @@ pub fn element_to_element(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &
     (q3 / 3.0, hi - lo)
 }
 
+/// The unoccluded form factor from a receiver triangle to a source polygon by the receiver's
+/// three-point rule alone, F ≈ (1/3) Σ_k F(x_k → S) (`quadrature_points`, Lambert's exact
+/// `point_to_polygon` in the source): the cheap member-pair estimator of cluster links
+/// (`links::member_pair_form_factor`, `gather::ArrivalScales`), whose ends are far apart next to
+/// their size, so the near rule's 48 points are not needed.
+pub fn triangle_to_polygon(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3]) -> f64 {
+    quadrature_points(receiver).into_iter().map(|x| point_to_polygon(x, receiver_normal, source)).sum::<f64>() / 3.0
+}
+
 /// The receiver quadrature for element pairs that are near each other (centre distance below 1.5 ×
 /// the sum of their bounding radii, which includes every pair that shares an edge or a corner): the
 /// three-point rule on each of the receiver's 16 midpoint sub-triangles (48 points). Where the two
@@ -161,57 +172,26 @@ fn near_quadrature(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 
     sum / 48.0
 }
 
-/// Six-bin projected-area model of a cluster: bin 2k holds Σ A_i max(0, n_ik)² and bin 2k + 1 holds
-/// Σ A_i max(0, −n_ik)² over the cluster's elements (area A_i, unit normal n_i). The squares of a unit
-/// normal's components sum to 1, so each element's bins sum to its area, the model's mean projected
-/// area over all directions is the exact A/4 of an isotropic cluster (Sillion 1995), and it is exact
-/// for axis-aligned elements. The same weights w_b(n) split a cluster's incoming light among its
-/// members (`gather::Irradiance::on_element`).
-///
-/// Squares rather than the L1 shares |n_k|/‖n‖₁: a face tilted a little off an axis (a rotated
-/// block, a facet of a sphere) keeps most of its weight in its main bin, so it takes less light from
-/// directions it faces away from (for n = (0.29, 0, −0.96), 0.08 of a +x arrival instead of 0.23),
-/// and head-on its projected area Σ|n_k|³ is at least the L1 model's 1/‖n‖₁ (Cauchy–Schwarz), closer
-/// to the exact A. Measured (session 12, `--method hierarchical`, radiosity mode): cornell_original
-/// seeds 0–3 0.00112 / 0.00086 / 0.00090 / 0.00110 → 0.00106 / 0.00082 / 0.00086 / 0.00105; two
-/// diffuse spheres in the empty box 0.0032 → 0.0016 against a 15 mm matrix; axis-aligned rooms
-/// unchanged.
-pub fn projected_area_bins(normal: Vec3, area: f32) -> [f32; 6] {
-    let l2 = normal.length_squared();
-    if !(l2 > 0.0) {
-        return [0.0; 6];
-    }
-    let s = area / l2;
-    let sq = |x: f32| x.max(0.0) * x.max(0.0);
-    [s * sq(normal.x), s * sq(-normal.x), s * sq(normal.y), s * sq(-normal.y), s * sq(normal.z), s * sq(-normal.z)]
-}
-
-/// Projected area of a six-bin cluster seen from unit direction `towards` (pointing from the cluster
-/// to the viewer): P(ω) = Σ_k |ω_k| · bin(k, sign ω_k).
-pub fn projected_area(bins: &[f32; 6], towards: Vec3) -> f32 {
-    let pick = |k: usize, w: f32| if w >= 0.0 { bins[2 * k] * w } else { bins[2 * k + 1] * -w };
-    pick(0, towards.x) + pick(1, towards.y) + pick(2, towards.z)
-}
-
-/// Projected area of a flat element of unit normal `normal` seen from unit direction `towards`:
-/// A · max(0, n·ω) (one-sided).
-pub fn element_projected_area(normal: Vec3, area: f32, towards: Vec3) -> f32 {
-    area * normal.dot(towards).max(0.0)
-}
-
 /// Sillion's (1995) point-to-point form factor for links with a cluster at either end:
 ///
 /// F_RS = P_S(ω_SR) · P_R(ω_RS) / (π d² A_R),
 ///
-/// with d the centre distance, P the projected area of each end seen from the other (A cos θ for an
-/// element, the six-bin model for a cluster). It satisfies reciprocity A_R F_RS = A_S F_SR and is the
-/// far-field limit of the exact form factor; clamped to [0, 1].
-pub fn cluster_form_factor(projected_source: f32, projected_receiver: f32, receiver_area: f32, distance: f32) -> f64 {
+/// with d the centre distance, P the projected area of each end seen from the other, D(ω) = Σ_i A_i
+/// max(0, n_i·ω) over its members (`Nodes::projected_area`: A cos θ for an element). It satisfies
+/// reciprocity A_R F_RS = A_S F_SR and is the far-field limit of the exact form factor; clamped to
+/// [0, 1]. With the receiver's P_R = D_R(ω), the link's power A_R·F_RS·B_S is exactly what the push
+/// spreads over the members facing ω (`gather::gather`): a member of normal n gets irradiance
+/// P_S·B_S·max(0, n·ω)/(π d²), that of a point source of intensity P_S·B_S/π.
+///
+/// (Until session 13 a cluster's P was a six-bin model, Σ_k |ω_k|·bin(k, sign ω_k) with bins Σ A_i
+/// max(0, ±n_ik)², and the push split a link's power among the bins facing ω: a member turned away
+/// from ω still received light through a bin it shares with members that face ω.)
+pub fn cluster_form_factor(projected_source: f64, projected_receiver: f64, receiver_area: f32, distance: f32) -> f64 {
     let d2 = distance as f64 * distance as f64;
     if !(d2 > 0.0) || !(receiver_area > 0.0) {
         return 0.0;
     }
-    let f = projected_source as f64 * projected_receiver as f64 / (std::f64::consts::PI * d2 * receiver_area as f64);
+    let f = projected_source * projected_receiver / (std::f64::consts::PI * d2 * receiver_area as f64);
     f.clamp(0.0, 1.0)
 }
 
@@ -249,50 +229,8 @@ mod tests {
     }
 
     #[test]
-    fn projected_area_bins_are_exact_for_axis_normals_and_mean_a_quarter() {
-        let bins = projected_area_bins(Vec3::Y, 2.0);
-        assert_eq!(projected_area(&bins, Vec3::Y), 2.0);
-        assert_eq!(projected_area(&bins, -Vec3::Y), 0.0);
-        // Mean over a Fibonacci sphere of 4096 directions, for a tilted normal: A/4 within the
-        // quadrature error of the sphere sampling (1e-3).
-        let n = vec3(0.3, -0.5, 0.8).normalize();
-        let bins = projected_area_bins(n, 1.0);
-        let count = 4096;
-        let mut sum = 0.0f64;
-        for i in 0..count {
-            let z = 1.0 - (2.0 * i as f32 + 1.0) / count as f32;
-            let r = (1.0 - z * z).sqrt();
-            let phi = i as f32 * 2.399_963;
-            sum += projected_area(&bins, vec3(r * phi.cos(), r * phi.sin(), z)) as f64;
-        }
-        assert!((sum / count as f64 - 0.25).abs() < 1e-3, "{}", sum / count as f64);
-    }
-
-    #[test]
-    fn a_tilted_face_takes_little_light_from_behind_and_near_its_full_area_head_on() {
-        // A block's face turned 17° about y, and arrivals it faces away from: light from +x a little
-        // behind its plane reaches it only through the model's +x bin.
-        let n = vec3(0.2928, 0.0, -0.9562).normalize();
-        let w = projected_area_bins(n, 1.0);
-        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6, "the weights split the whole area: {w:?}");
-        let behind = vec3(0.79, 0.44, 0.44).normalize();
-        assert!(n.dot(behind) < 0.0);
-        let l1_share = n.x / (n.x.abs() + n.z.abs()) * behind.x;
-        assert!(projected_area(&w, behind) < 0.4 * l1_share, "{} vs L1 {l1_share}", projected_area(&w, behind));
-        // Head-on, Σ|n_k|³ ≥ 1/‖n‖₁ for every unit normal (Cauchy–Schwarz), with equality only on
-        // the axes and the diagonals.
-        for k in 0..200 {
-            let t = k as f32 * 0.37;
-            let n = vec3(t.sin() * (1.3 * t).cos(), (0.7 * t).cos(), t.cos() * (1.3 * t).sin()).normalize();
-            let l1 = 1.0 / (n.x.abs() + n.y.abs() + n.z.abs());
-            let head_on = projected_area(&projected_area_bins(n, 1.0), n);
-            assert!(head_on >= l1 - 1e-6 && head_on <= 1.0 + 1e-6, "{n:?}: {head_on} vs L1 {l1}");
-        }
-    }
-
-    #[test]
     fn cluster_form_factor_obeys_reciprocity() {
-        let (pa, pb, aa, ab, d) = (0.3f32, 0.7f32, 1.5f32, 2.5f32, 4.0f32);
+        let (pa, pb, aa, ab, d) = (0.3f64, 0.7f64, 1.5f32, 2.5f32, 4.0f32);
         let fab = cluster_form_factor(pb, pa, aa, d);
         let fba = cluster_form_factor(pa, pb, ab, d);
         assert!((aa as f64 * fab - ab as f64 * fba).abs() < 1e-12);

@@ -2,9 +2,7 @@
 //! it is linked to. Stored by receiver in compressed rows; `estimate` picks the estimator by link type
 //! (see `form_factor` for which one serves which).
 
-use super::form_factor::{
-    cluster_form_factor, cluster_form_factor_bound, element_projected_area, element_to_element, projected_area,
-};
+use super::form_factor::{cluster_form_factor, cluster_form_factor_bound, element_to_element, triangle_to_polygon};
 use super::nodes::Nodes;
 use super::visibility::{link_visibility, sampled_form_factor, Visibility, VisibilityContext};
 
@@ -211,7 +209,9 @@ pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
 ///   ΔF = V·ΔF_quadrature + 2·F̄·min(V, 1 − V) (receiver quadrature error, see
 ///   `form_factor::element_to_element`, plus partial visibility, so a significant link in a penumbra
 ///   is refined).
-/// - Far links with a cluster end: F = V · P_S P_R / (π d² A_R) (Sillion 1995), ΔF = the bound
+/// - Far links with a cluster end: F = V · `member_pair_form_factor` when the ends hold at most
+///   `EXACT_NEAR_PAIRS` member pairs, else V · P_S P_R / (π d² A_R) (Sillion 1995) with each end's
+///   exact projected area P = Σ A_i max(0, n_i·ω) (`Nodes::projected_area`); ΔF = the bound
 ///   `cluster_form_factor_bound` times max(V, 1/(N+1)): the approximation itself is the error;
 ///   plus `push_spread` (a cluster receiver partly hidden from the source), not capped.
 /// - Near links kept with an estimated F also add `near_push_spread`.
@@ -252,16 +252,14 @@ pub fn estimate(
     let offset = cr - cs;
     let d = offset.length();
     let towards_receiver = if d > 0.0 { offset / d } else { glam::Vec3::ZERO };
-    let projected = |node: usize, towards| {
-        if nodes.is_cluster[node] {
-            projected_area(&nodes.projected_bins[node], towards)
-        } else {
-            element_projected_area(nodes.normal[node], nodes.area[node], towards)
+    let f = match member_pair_form_factor(nodes, receiver, source) {
+        Some(f) => f,
+        None => {
+            let ps = nodes.projected_area(source, towards_receiver);
+            let pr = nodes.projected_area(receiver, -towards_receiver);
+            cluster_form_factor(ps, pr, nodes.area[receiver], d)
         }
     };
-    let ps = projected(source, towards_receiver);
-    let pr = projected(receiver, -towards_receiver);
-    let f = cluster_form_factor(ps, pr, nodes.area[receiver], d);
     let bound = cluster_form_factor_bound(f, d, nodes.radius[receiver] + nodes.radius[source]);
     if !(bound > 0.0) {
         return None;
@@ -275,14 +273,46 @@ pub fn estimate(
     Some(((f * v) as f32, spread + push_spread(nodes, receiver, f, visibility) as f32))
 }
 
+/// The unoccluded form factor of a far link whose ends hold at most `EXACT_NEAR_PAIRS` member pairs
+/// (`Nodes::members`: a cluster's input triangles, an element itself):
+///
+/// F_RS = Σ_i A_i Σ_σ F_3(i ← σ) / A_R,
+///
+/// F_3 the element estimator's three-point receiver rule (`form_factor::triangle_to_polygon`, exact
+/// in the source) over every pair: each member's own distance and orientation to the source, which
+/// the point-to-point cluster formula misses when the ends are a few radii apart (the Cornell box's
+/// short block's front face took 1.7× its light from red-wall elements at a grazing angle through
+/// it, session 13). `None` for larger ends (the cluster formula serves them).
+pub fn member_pair_form_factor(nodes: &Nodes, receiver: usize, source: usize) -> Option<f64> {
+    let (mut rs, mut ss) = (Vec::new(), Vec::new());
+    if !nodes.member_count_within(receiver, EXACT_NEAR_PAIRS) {
+        return None;
+    }
+    nodes.members(receiver, &mut rs);
+    if !nodes.member_count_within(source, EXACT_NEAR_PAIRS / rs.len().max(1)) {
+        return None;
+    }
+    nodes.members(source, &mut ss);
+    let mut sum = 0.0f64;
+    for &r in &rs {
+        for &s in &ss {
+            if nodes.input[r] != nodes.input[s] {
+                sum +=
+                    nodes.area[r] as f64 * triangle_to_polygon(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
+            }
+        }
+    }
+    Some((sum / nodes.area[receiver] as f64).min(1.0))
+}
+
 /// The error of pushing a link's irradiance to everything below its receiver that faces the source
 /// when part of it is hidden from the source (ΔF, same unit as F; `unoccluded` is the link's form
 /// factor before visibility, V = `Visibility::visible`, the unoccluded share of the sample pairs that
 /// face each other):
 ///
 /// - cluster receiver, 0 < V < 1: ΔF = F·max(1, (1 − V)/V), F = V·F_unoccluded. The gather already
-///   sends a cluster's incoming light only to the members that face its direction (`gather`, six-bin
-///   model), so members facing away are not wrong; but of the facing members only the share V is
+///   sends a cluster's incoming light only to the members that face its direction, each by its own
+///   cosine (`gather`), so members facing away are not wrong; but of the facing members only the share V is
 ///   reached, and the push lights the hidden ones too: their exitance is wrong by ρ·G and the
 ///   reached part's by ρ·G·(1 − V)/V. Applying the exitance criterion ρ·B_S·ΔF ≤ ε·Ē to the worse
 ///   part keeps light from leaking past a wall into members on its far side that face the source
@@ -398,7 +428,7 @@ fn subdivision_shape(nodes: &Nodes, node: usize) -> u128 {
 }
 
 /// Collects the leaf elements below `node` into `out`; false (and stops) past `limit` leaves.
-fn leaves_below(nodes: &Nodes, node: usize, limit: usize, out: &mut Vec<usize>) -> bool {
+pub fn leaves_below(nodes: &Nodes, node: usize, limit: usize, out: &mut Vec<usize>) -> bool {
     let mut stack = vec![node];
     while let Some(n) = stack.pop() {
         if nodes.is_leaf(n) {

@@ -10,7 +10,8 @@
 //! Form factors per link type (see `links::estimate`):
 //! - element ← element: Lambert's exact point-to-polygon formula over a receiver quadrature (three
 //!   points; 48 when the two elements are near each other) times ray visibility;
-//! - far links with a cluster end: Sillion's isotropic-cluster formula times ray visibility;
+//! - far links with a cluster end: the element rule over member pairs (at most 64), else Sillion's
+//!   point-to-point cluster formula with exact projected areas, times ray visibility;
 //! - near links (overlapping bounding spheres, a cluster straddling an element's plane, a cluster's
 //!   self-link): the element estimator summed over all leaf pairs when there are at most 64, else
 //!   a sampled estimator exact in each sampled source element (`visibility::sampled_form_factor`).

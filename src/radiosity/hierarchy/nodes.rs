@@ -6,7 +6,6 @@ use rayon::prelude::*;
 
 use std::sync::Arc;
 
-use super::form_factor::projected_area_bins;
 use super::texels::InputTexels;
 
 /// "No node": a leaf's `first_child`, the root's `parent`, a cluster's `input`.
@@ -19,7 +18,6 @@ pub const NODE_BYTES: usize = std::mem::size_of::<bool>()
     + std::mem::size_of::<[Vec3; 3]>()
     + 4 * std::mem::size_of::<Vec3>()
     + 4 * std::mem::size_of::<f32>()
-    + std::mem::size_of::<[f32; 6]>()
     + 2 * std::mem::size_of::<DVec3>()
     + std::mem::size_of::<f64>();
 
@@ -58,8 +56,6 @@ pub struct Nodes {
     /// Largest channel of the reflectance, area-averaged over a cluster's children (the ρ of the
     /// error estimate; area-averaging keeps refinement's error sums from growing).
     pub reflectance_max: Vec<f32>,
-    /// Six-bin projected-area model (see `form_factor::projected_area_bins`).
-    pub projected_bins: Vec<[f32; 6]>,
     /// Exitance B (W/m²); for an inner node, the area-weighted mean of its children's.
     pub exitance: Vec<DVec3>,
     /// Irradiance gathered over the node's own links in the last sweep (W/m², before ρ).
@@ -118,6 +114,73 @@ impl Nodes {
         }
     }
 
+    /// The projected area of a node seen from unit direction `towards` (from the node to the viewer),
+    /// exact for its members:
+    ///
+    /// D(ω) = Σ_i A_i · max(0, n_i·ω)
+    ///
+    /// over the elements of the node (itself for an element; for a cluster, its input triangles, the
+    /// first elements below it, whose pieces share their normal). One-sided, like the elements. For
+    /// a cluster it walks the members: O(members).
+    pub fn projected_area(&self, node: usize, towards: Vec3) -> f64 {
+        self.member_sum(node, |m| self.area[m] as f64 * self.normal[m].dot(towards).max(0.0) as f64)
+    }
+
+    /// `projected_area` over the members' open areas (`open_area`): D_open(ω) = Σ_i A_open,i ·
+    /// max(0, n_i·ω), the area a cluster's incoming light from ω lands on (`gather::arrival_scales`).
+    pub fn open_projected_area(&self, node: usize, towards: Vec3) -> f64 {
+        self.member_sum(node, |m| self.open_area[m] as f64 * self.normal[m].dot(towards).max(0.0) as f64)
+    }
+
+    /// Σ f(m) over the members m of `node`: the node itself for an element, the first elements below
+    /// it for a cluster, in a fixed depth-first order (so the f64 sum is reproducible).
+    pub fn member_sum(&self, node: usize, f: impl Fn(usize) -> f64) -> f64 {
+        if !self.is_cluster[node] {
+            return f(node);
+        }
+        let mut sum = 0.0;
+        let mut stack = Vec::with_capacity(64);
+        stack.push(node);
+        while let Some(n) = stack.pop() {
+            if self.is_cluster[n] {
+                stack.extend(self.children(n).rev());
+            } else {
+                sum += f(n);
+            }
+        }
+        sum
+    }
+
+    /// Whether `node` has at most `limit` members (see `member_sum`); stops counting past the limit.
+    pub fn member_count_within(&self, node: usize, limit: usize) -> bool {
+        let mut count = 0;
+        let mut stack = vec![node];
+        while let Some(n) = stack.pop() {
+            if self.is_cluster[n] {
+                stack.extend(self.children(n));
+            } else {
+                count += 1;
+                if count > limit {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// The members of `node` (see `member_sum`) in the same order.
+    pub fn members(&self, node: usize, out: &mut Vec<usize>) {
+        out.clear();
+        let mut stack = vec![node];
+        while let Some(n) = stack.pop() {
+            if self.is_cluster[n] {
+                stack.extend(self.children(n).rev());
+            } else {
+                out.push(n);
+            }
+        }
+    }
+
     /// Appends an element (input triangle or a piece of one) and returns its index.
     pub fn push_element(
         &mut self,
@@ -144,7 +207,6 @@ impl Nodes {
             area,
             radius,
             reflectance_max: reflectance.max_element(),
-            projected_bins: projected_area_bins(normal, area),
         })
     }
 
@@ -162,7 +224,6 @@ impl Nodes {
             area: 0.0,
             radius: 0.0,
             reflectance_max: 0.0,
-            projected_bins: [0.0; 6],
         })
     }
 
@@ -183,7 +244,6 @@ impl Nodes {
         self.open_area.push(n.area);
         self.radius.push(n.radius);
         self.reflectance_max.push(n.reflectance_max);
-        self.projected_bins.push(n.projected_bins);
         self.exitance.push(n.emission.as_dvec3());
         self.gathered.push(DVec3::ZERO);
         self.exitance_mean.push(mean_channel(n.emission.as_dvec3()));
@@ -198,7 +258,6 @@ impl Nodes {
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         let (mut area, mut open_area) = (0.0f32, 0.0f32);
         let (mut rho, mut emission, mut rho_max) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
-        let mut bins = [0.0f32; 6];
         let mut exitance = DVec3::ZERO;
         for c in first as usize..first as usize + count as usize {
             self.parent[c] = cluster as u32;
@@ -209,9 +268,6 @@ impl Nodes {
             emission += self.emission[c] * a;
             rho_max += self.reflectance_max[c] * a;
             exitance += self.exitance[c] * a as f64;
-            for (b, x) in bins.iter_mut().zip(self.projected_bins[c]) {
-                *b += x;
-            }
             let (clo, chi) = self.bounds(c);
             lo = lo.min(clo);
             hi = hi.max(chi);
@@ -222,7 +278,6 @@ impl Nodes {
         self.reflectance[cluster] = rho * inv;
         self.emission[cluster] = emission * inv;
         self.reflectance_max[cluster] = rho_max * inv;
-        self.projected_bins[cluster] = bins;
         self.exitance[cluster] = exitance * inv as f64;
         self.exitance_mean[cluster] = mean_channel(self.exitance[cluster]);
         self.centre[cluster] = (lo + hi) * 0.5;
@@ -261,7 +316,6 @@ impl Nodes {
             self.area[child] = parent_area * 0.25;
             self.open_area[child] = open_quarter;
             self.normal[child] = self.normal[node];
-            self.projected_bins[child] = projected_area_bins(self.normal[node], parent_area * 0.25);
             self.exitance[child] = exitance;
             self.exitance_mean[child] = mean_channel(exitance);
             self.parent[child] = node as u32;
@@ -323,7 +377,6 @@ struct Pushed {
     area: f32,
     radius: f32,
     reflectance_max: f32,
-    projected_bins: [f32; 6],
 }
 
 /// (r + g + b) / 3: the scalar exitance of the error estimate.

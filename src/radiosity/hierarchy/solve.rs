@@ -3,9 +3,10 @@
 //! this sweep's values), pushes its irradiance to its children, and pulls their exitance back up as
 //! soon as they are done.
 
-use super::gather::{gather, leaf_exitance, on_open_part, pulled, Irradiance};
+use super::gather::{gather_into, leaf_exitance, pulled, push_step, Arrival, ArrivalScales, Pushed};
 use super::links::Links;
 use super::nodes::{mean_channel, Nodes};
+use glam::DVec3;
 
 /// What a sweep changed: the largest change of a leaf's exitance (any channel) and the largest leaf
 /// exitance after it (W/m²).
@@ -17,16 +18,22 @@ pub struct SweepChange {
 
 /// One in-place sweep over the tree below `root` with relaxation factor ω:
 ///
-/// G_n = G_parent + Σ_{S linked to n} F_nS B_S (per orientation below a cluster, see
-/// `gather::gather`; an element takes its own normal's share);  leaves: B ← B + ω(E + ρG − B);
+/// G_n = G_parent + Σ_{S linked to n} F_nS B_S (a cluster's links as arrivals that each element below
+/// takes by its own cosine, see `gather::Irradiance`);  leaves: B ← B + ω(E + ρG − B);
 /// inner nodes: B = Σ_c A_c B_c / Σ_c A_c (after their children).
 ///
-/// Serial and in a fixed order, so the result does not depend on threads. Updates `exitance`,
-/// `exitance_mean` and `gathered` (own links only) of every node.
-pub fn sweep(nodes: &mut Nodes, links: &Links, root: usize, relaxation: f64) -> SweepChange {
+/// `scales` are the links' `ArrivalScales`. Serial and in a fixed order, so the result does not
+/// depend on threads. Updates `exitance`, `exitance_mean` and `gathered` (own links only) of every
+/// node.
+pub fn sweep(nodes: &mut Nodes, links: &Links, scales: &ArrivalScales, root: usize, relaxation: f64) -> SweepChange {
     let mut change = SweepChange::default();
-    // Explicit stack: (node, irradiance from above, children visited?).
-    let mut stack: Vec<(usize, Irradiance, bool)> = vec![(root, Irradiance::default(), false)];
+    // The pending arrivals of the current path (`gather::Pushed` holds each node's range of it).
+    let mut arrivals: Vec<Arrival> = Vec::new();
+    // Irradiance member shares put on elements not yet reached (`ArrivalScales`).
+    let mut direct: Vec<(usize, DVec3)> = Vec::new();
+    let mut pending = vec![DVec3::ZERO; nodes.len()];
+    // Explicit stack: (node, what its parent pushed, children visited?).
+    let mut stack: Vec<(usize, Pushed, bool)> = vec![(root, Pushed::default(), false)];
     while let Some((n, down, expanded)) = stack.pop() {
         if expanded {
             let b = pulled(nodes, n, &nodes.exitance);
@@ -34,17 +41,13 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, root: usize, relaxation: f64) -> 
             nodes.exitance_mean[n] = mean_channel(nodes.exitance[n]);
             continue;
         }
-        let own = gather(nodes, links, n, &nodes.exitance);
-        nodes.gathered[n] = own.mean(nodes.area[n], &nodes.projected_bins[n]);
-        let mut g = if nodes.open_area[n] > 0.0 {
-            down.plus(&on_open_part(nodes, n, own))
-        } else {
-            Irradiance::default() // all of it hidden (`contact`): nothing lands
-        };
-        if !nodes.is_cluster[n] {
-            // An element: every point below it has its normal.
-            g = Irradiance::uniform(g.on_element(nodes.normal[n]));
+        arrivals.truncate(down.hi);
+        let (own_uniform, own_mean) = gather_into(nodes, links, scales, n, &nodes.exitance, &mut arrivals, &mut direct);
+        nodes.gathered[n] = own_mean;
+        for (m, g) in direct.drain(..) {
+            pending[m] += g;
         }
+        let g = push_step(nodes, n, down, own_uniform, std::mem::take(&mut pending[n]), &arrivals);
         if nodes.is_leaf(n) {
             let old = nodes.exitance[n];
             let new = leaf_exitance(
@@ -95,11 +98,12 @@ pub fn solve_until(
     on_sweep: &mut dyn FnMut(u32, SweepChange),
     stop: &dyn Fn() -> bool,
 ) -> Option<(u32, bool)> {
+    let scales = ArrivalScales::new(nodes, links);
     for k in 1..=max_sweeps {
         if stop() {
             return None;
         }
-        let c = sweep(nodes, links, root, relaxation);
+        let c = sweep(nodes, links, &scales, root, relaxation);
         on_sweep(k, c);
         if c.max_change <= tolerance * c.max_exitance {
             return Some((k, true));
