@@ -242,10 +242,12 @@ pub enum MethodChoice {
 }
 
 /// Predicted CPU seconds of the full matrix's hemicubes (`radiosity::matrix::cost`) above which
-/// `method = "auto"` leaves it for the hierarchy: about twice what the hierarchy takes on the shipped
-/// scenes at `default` (16–30 CPU-s), since below it the matrix is the more accurate of the two
-/// (cornell_original relMSE 0.000361 against the hierarchy's 0.00122).
-pub const AUTO_MATRIX_CPU_SECONDS: f64 = 60.0;
+/// `method = "auto"` leaves it for the hierarchy (three minutes of CPU, 1.5 min on two cores). Where
+/// both were measured the matrix is the more accurate, and no slower up to here: cornell_original
+/// relMSE 0.000361 against the hierarchy's 0.00122 (session 9); the rotunda at `high` (19,248
+/// elements, predicted 87 CPU-s) 0.00073 in 58 CPU-s against the hierarchy's 0.0030 in 86 CPU-s
+/// (session 13, after the member-exact push). Was 60 CPU-s, which sent that rotunda to the hierarchy.
+pub const AUTO_MATRIX_CPU_SECONDS: f64 = 180.0;
 
 /// `AUTO_MATRIX_CPU_SECONDS` for scenes with mirrors or glass: only the matrix carries the light that
 /// reaches diffuse surfaces through them (its extended form factors; the hierarchy transports diffuse
