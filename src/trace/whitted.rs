@@ -169,8 +169,9 @@ impl<'a> Tracer<'a> {
     }
 
     /// Uses the surfaces' smooth-shading normals (`Surface::shading_normals`, the scene the mesh was
-    /// built from) for mirror, dielectric and highlight directions. The geometric normal still decides
-    /// the side hit and offsets ray origins.
+    /// built from) for mirror, dielectric and highlight directions and for the diffuse term's cosines
+    /// (direct light and final gather, `transport::shading`). The geometric normal still decides the
+    /// side hit, which light may arrive, and offsets ray origins.
     pub fn with_shading_normals(mut self, surfaces: &'a [Surface]) -> Self {
         self.surfaces = Some(surfaces);
         self
@@ -311,7 +312,8 @@ impl<'a> Tracer<'a> {
     ///
     /// with L_d the diffuse term (`Diffuse::radiance`: the Gouraud-interpolated radiosity B(p)/π, or
     /// with `DirectMode::Pixel` its indirect part plus direct light from shadow rays, see
-    /// `DirectLight::estimate`), the branches' weights from `transport::scatter` (R the unpolarised Fresnel
+    /// `DirectLight::estimate`, both with the smooth shading normal where the surface has vertex
+    /// normals), the branches' weights from `transport::scatter` (R the unpolarised Fresnel
     /// reflectance of a dielectric with index `Ni`), plus Phong highlights from the emitters. Rays
     /// deeper than `max_depth` or below `min_throughput` (`transport::scatter::carries`) are not
     /// traced; rays leaving the scene see black.

@@ -244,11 +244,15 @@ mod tests {
         let e = estimate(strata, &l, &r, Vec3::Z);
         assert!((e.irradiance.x - 2.0 * PI).abs() < 1e-4 && (e.harmonic_distance - 3.0).abs() < 1e-4);
         assert!(e.rotation_gradient[0].length() < 1e-4 && e.translation_gradient[0].length() < 1e-4);
-        // Traced cells of 1 and 3 in equal numbers: the untraced ones read 2.
+        // Traced cells of 1 and 3 in equal numbers (an even run of cells at the end): the untraced
+        // ones read 2, the traced keep their values.
         let mut l: Vec<Vec3> = (0..cells).map(|c| Vec3::splat(if c % 2 == 0 { 1.0 } else { 3.0 })).collect();
-        let traced: Vec<bool> = (0..cells).map(|c| c < cells - 4).collect();
+        let untraced = 4 + cells % 2;
+        let traced: Vec<bool> = (0..cells).map(|c| c >= untraced).collect();
+        let before = l.clone();
         fill_untraced(&mut l, &mut vec![1.0; cells], &traced);
-        assert!(l[cells - 1] == Vec3::splat(2.0) && l[0] == Vec3::ONE);
+        assert!(l[..untraced].iter().all(|&v| v == Vec3::splat(2.0)));
+        assert_eq!(l[untraced..], before[untraced..]);
     }
 
     #[test]
