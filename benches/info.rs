@@ -56,7 +56,7 @@ fn room_obj() -> String {
         // Alternately touching the x = 0 wall and sunk 0.1 into it.
         let sunk = if s % 2 == 0 { 0.0 } else { 0.1 };
         let centre = Vec3::new(radius - sunk, 2.0 + 1.4 * (s / 2) as f32 * 1.6, 3.0 + 6.0 * (s % 2) as f32);
-        for tri in sphere_triangles(centre, radius, SPHERE_SEGMENTS) {
+        for (tri, _) in sphere_triangles(centre, radius, SPHERE_SEGMENTS) {
             face(&mut obj, &tri);
         }
     }

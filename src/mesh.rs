@@ -63,6 +63,23 @@ impl Elements {
     }
 }
 
+/// An interpolated normal n with n·n_g ≥ this (within about 0.08° of the facet's n_g) is n_g itself
+/// for the diffuse term (`Mesh::smooth_normal`), so a flat face's rounded vertex normals render as
+/// no normals do.
+/// The snap moves any cosine by at most sin 0.08° ≈ 1.4e-3, below what 8-bit output shows; it happens
+/// only near a facet's centre on a tessellation fine enough (over 2000 segments around) that its
+/// facets could not be told apart anyway.
+pub const FLAT_NORMAL_COS: f32 = 1.0 - 1e-6;
+
+/// `facing` where unit normal n lies within `FLAT_NORMAL_COS` of it, else n.
+pub fn flat_within_tolerance(n: Vec3, facing: Vec3) -> Vec3 {
+    if n.dot(facing) >= FLAT_NORMAL_COS {
+        facing
+    } else {
+        n
+    }
+}
+
 /// The meshed scene.
 #[derive(Clone, Debug, Default)]
 pub struct Mesh {
@@ -523,12 +540,11 @@ impl Mesh {
             .collect()
     }
 
-    /// The shading normal at `p` on `element`'s scene surface, oriented like `facing`: the surface's
+    /// The smooth normal at `p` on `element`'s scene surface, oriented like `facing`: the surface's
     /// vertex normals (`Surface::shading_normals`) interpolated linearly over the triangle (a quad: over
-    /// the fan triangle (0,1,2) or (0,2,3) holding p). Falls back to `facing` where there is none or
-    /// where it faces away from `incoming`. Pass one's specular paths and pass two's Whitted rays both
-    /// bend by this rule.
-    pub fn shading_normal(&self, surfaces: &[Surface], element: usize, p: Vec3, facing: Vec3, incoming: Vec3) -> Vec3 {
+    /// the fan triangle (0,1,2) or (0,2,3) holding p). `facing` where the surface has none (or they
+    /// cancel). The diffuse term's cosines use it (`transport::shading`).
+    pub fn interpolated_normal(&self, surfaces: &[Surface], element: usize, p: Vec3, facing: Vec3) -> Vec3 {
         let mesh_surface = self.elements.surface[element] as usize;
         let Some(surface) = self.surface_source.get(mesh_surface).and_then(|&s| surfaces.get(s as usize)) else {
             return facing;
@@ -555,12 +571,21 @@ impl Mesh {
             normals[0] * w0 + normals[1] * w1 + normals[2] * w2
         };
         let n = n.normalize_or_zero();
-        let n = if n.dot(facing) < 0.0 { -n } else { n };
-        if n.dot(incoming) < 0.0 {
-            n
-        } else {
+        if n == Vec3::ZERO {
             facing
+        } else if n.dot(facing) < 0.0 {
+            -n
+        } else {
+            n
         }
+    }
+
+    /// The normal the diffuse term's cosines use at `p` (`transport::shading`): `interpolated_normal`,
+    /// but `facing` itself where the two lie within `FLAT_NORMAL_COS`: a flat face's own vertex
+    /// normals, as exporters write them rounded to 4–6 digits (1 − cos ≈ 1e-9), then take the flat
+    /// surface's arithmetic bit for bit.
+    pub fn smooth_normal(&self, surfaces: &[Surface], element: usize, p: Vec3, facing: Vec3) -> Vec3 {
+        flat_within_tolerance(self.interpolated_normal(surfaces, element, p, facing), facing)
     }
 
     /// Sum of element areas.

@@ -47,7 +47,7 @@ fn jump_and_error(mesh: &Mesh, values: &[Vec3]) -> (f64, f64) {
 #[test]
 fn a_sphere_under_a_light_is_continuous_across_its_facet_edges() {
     let surfaces: Vec<Surface> =
-        sphere_triangles(Vec3::ZERO, 1.0, 24).into_iter().map(|t| common::surface(t.to_vec(), 0, false)).collect();
+        sphere_triangles(Vec3::ZERO, 1.0, 24).into_iter().map(|(t, _)| common::surface(t.to_vec(), 0, false)).collect();
     // Elements larger than the facets: one element per facet, as tessellated objects usually mesh.
     let mesh = mesh_of(surfaces, 1, 10.0);
     let element: Vec<DVec3> = mesh.elements.centre.iter().map(|&c| DVec3::splat(field(c))).collect();
@@ -67,7 +67,7 @@ fn subdivided_facets_weld_their_edge_grids() {
     // Facets meshed into several elements each: the grid points the two facets put on their shared
     // edge agree only to rounding, and still become one vertex.
     let surfaces: Vec<Surface> =
-        sphere_triangles(Vec3::ZERO, 1.0, 16).into_iter().map(|t| common::surface(t.to_vec(), 0, false)).collect();
+        sphere_triangles(Vec3::ZERO, 1.0, 16).into_iter().map(|(t, _)| common::surface(t.to_vec(), 0, false)).collect();
     // 16 segments: facets 22.5° apart, inside the smoothing angle.
     let mesh = mesh_of(surfaces, 1, 0.15);
     assert!(mesh.elements.len() > 4 * 16 * 7, "facets are subdivided: {}", mesh.elements.len());

@@ -323,8 +323,9 @@ pub fn parse_str(text: &str, path: &Path) -> Result<SceneDescription, SceneError
         let segments = loc.positive_int(&Some(sv.segments.clone()), "segments", 3, 4096, 32)?;
         let material = find(&sv.material)?;
         let name = sv.name.clone().unwrap_or_else(|| "sphere".into());
-        for tri in sphere_triangles(centre, radius, segments) {
-            surfaces.push(surface(tri.to_vec(), material, false, &name, inline(s.span())));
+        for (tri, normals) in sphere_triangles(centre, radius, segments) {
+            let triangle = surface(tri.to_vec(), material, false, &name, inline(s.span()));
+            surfaces.push(Surface { shading_normals: Some(normals.to_vec()), ..triangle });
         }
     }
     // OBJ files without a face, named if the scene ends up empty.

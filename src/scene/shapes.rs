@@ -27,23 +27,30 @@ pub fn box_faces(lo: Vec3, hi: Vec3, inward: bool) -> Vec<[Vec3; 4]> {
     faces
 }
 
-/// A UV sphere as triangles, counter-clockwise seen from outside.
-pub fn sphere_triangles(centre: Vec3, radius: f32, segments: u32) -> Vec<[Vec3; 3]> {
+/// A UV sphere as triangles, counter-clockwise seen from outside, each with its analytic vertex
+/// normals n = (p − centre)/r (pointing out; the shading turns them to the side hit, so a sphere seen
+/// from inside is smooth too).
+pub fn sphere_triangles(centre: Vec3, radius: f32, segments: u32) -> Vec<([Vec3; 3], [Vec3; 3])> {
     let rings = (segments / 2).max(2);
-    let point = |ring: u32, seg: u32| {
+    let direction = |ring: u32, seg: u32| {
         let theta = std::f32::consts::PI * ring as f32 / rings as f32;
         let phi = 2.0 * std::f32::consts::PI * seg as f32 / segments as f32;
-        centre + radius * Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin())
+        Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin())
+    };
+    let corner = |ring: u32, seg: u32| {
+        let n = direction(ring, seg);
+        (centre + radius * n, n.normalize())
     };
     let mut tris = Vec::new();
     for ring in 0..rings {
         for seg in 0..segments {
-            let (a, b, c, d) = (point(ring, seg), point(ring + 1, seg), point(ring + 1, seg + 1), point(ring, seg + 1));
+            let (a, b, c, d) =
+                (corner(ring, seg), corner(ring + 1, seg), corner(ring + 1, seg + 1), corner(ring, seg + 1));
             if ring > 0 {
-                tris.push([a, b, d]);
+                tris.push(([a.0, b.0, d.0], [a.1, b.1, d.1]));
             }
             if ring + 1 < rings {
-                tris.push([b, c, d]);
+                tris.push(([b.0, c.0, d.0], [b.1, c.1, d.1]));
             }
         }
     }
@@ -167,6 +174,20 @@ mod tests {
         [vec3(0.0, 0.0, 0.0), vec3(0.5, 0.0, 0.0), vec3(0.5, 0.25, 0.0), vec3(0.0, 0.25, 0.0)]
             .map(|v| v + offset)
             .to_vec()
+    }
+
+    #[test]
+    fn sphere_vertex_normals_are_radial_and_face_out() {
+        let centre = vec3(1.0, -2.0, 0.5);
+        for (tri, normals) in sphere_triangles(centre, 3.0, 24) {
+            let facet = polygon_normal(&tri).normalize();
+            for (p, n) in tri.iter().zip(normals) {
+                assert!((n.length() - 1.0).abs() < 1e-6);
+                assert!(((*p - centre) / 3.0 - n).length() < 1e-5, "{p} {n}");
+                // Within half a facet's angle (7.5° around, 15° at the poles' fans) of the facet.
+                assert!(n.dot(facet) > 0.95, "{n} vs {facet}");
+            }
+        }
     }
 
     #[test]

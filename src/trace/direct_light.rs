@@ -13,6 +13,7 @@ use crate::mesh::Mesh;
 use crate::transport::cut_outs::OpaqueRay;
 use crate::transport::emitters::Emitters;
 use crate::transport::hit::{leave_surface, offset_at};
+use crate::transport::shading::SurfaceNormals;
 
 /// The direct light at a diffuse hit: irradiance E_direct and the highlight integral (see
 /// [`DirectLight::estimate`]).
@@ -90,14 +91,18 @@ impl<'a> DirectLight<'a> {
         &self.emitters
     }
 
-    /// Light from the emitters at point `p` with unit normal `n` (on the side being shaded), with N =
+    /// Light from the emitters at point `p` with unit normals `normals` (on the side being shaded: a
+    /// `Vec3` for a flat point, else geometric and smooth shading normals), with N =
     /// `samples` shadow rays (the tracer passes [`DirectLight::light_samples`]; a final gather's
     /// near bounce its own count) to points x_k drawn on the emitters with area density p_A(x_k)
     /// (triangle by power, then uniform on it; `Emitters::sample`) from one `Sampler::pattern_2d`:
     ///
     /// E ≈ (1/N) Σ_k V(p, x_k) L_e(x_k) cos θ_k cos θ'_k / (r_k² p_A(x_k)),
     ///
-    /// θ at p, θ' at the emitter (only its emitting side counts). The diffuse reflected radiance is
+    /// θ at p, θ' at the emitter (only its emitting side counts). With a shading normal cos θ is
+    /// `SurfaceNormals::cosine`: max(0, n_s·ω) normalised, and zero for a sample below the geometric
+    /// plane (such a light cannot reach the facet, whatever the shading normal leans towards); rays
+    /// leave along the geometric normal. The diffuse reflected radiance is
     /// ρ/π·E. With `highlight = (mirror direction r, exponent n)` it also estimates H (see
     /// [`DirectEstimate`]) by two strategies combined with the power heuristic: the same N light
     /// samples, of solid-angle density p_L(ω) = p_A r²/cos θ', weighted w_L; and N directions drawn
@@ -112,7 +117,7 @@ impl<'a> DirectLight<'a> {
         &self,
         samples: u32,
         p: Vec3,
-        n: Vec3,
+        normals: impl Into<SurfaceNormals>,
         highlight: Option<(Vec3, f32)>,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
@@ -121,8 +126,9 @@ impl<'a> DirectLight<'a> {
         if samples == 0 || self.emitters.is_empty() {
             return out;
         }
+        let normals = normals.into();
         let mesh = self.mesh;
-        let origin = leave_surface(p, n, self.offset);
+        let origin = leave_surface(p, normals.geometric, self.offset);
         let count = samples as f32;
         let pattern = sampler.pattern_2d(samples);
         for k in 0..samples {
@@ -137,7 +143,7 @@ impl<'a> DirectLight<'a> {
             }
             let dist = dist2.sqrt();
             let w = to_light / dist;
-            let cos_here = n.dot(w);
+            let cos_here = normals.cosine(w);
             if cos_here <= 0.0 {
                 continue;
             }
@@ -158,7 +164,7 @@ impl<'a> DirectLight<'a> {
             }
         }
         if let Some((mirror, exponent)) = highlight {
-            out.highlight += self.highlight_by_lobe(samples, origin, n, mirror, exponent, sampler, counts);
+            out.highlight += self.highlight_by_lobe(samples, origin, normals, mirror, exponent, sampler, counts);
         }
         out
     }
@@ -182,7 +188,7 @@ impl<'a> DirectLight<'a> {
         &self,
         samples: u32,
         origin: Vec3,
-        n: Vec3,
+        normals: SurfaceNormals,
         mirror: Vec3,
         exponent: f32,
         sampler: &mut Sampler,
@@ -193,7 +199,7 @@ impl<'a> DirectLight<'a> {
         let mut sum = Vec3::ZERO;
         for j in 0..samples {
             let w = sample_phong_lobe(mirror, exponent, sampler.point_2d(&pattern, j));
-            let cos_here = n.dot(w);
+            let cos_here = normals.cosine(w);
             if cos_here <= 0.0 {
                 continue;
             }

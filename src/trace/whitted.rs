@@ -24,7 +24,7 @@ use crate::transport::hit::{ray_offset, scene_scale};
 use crate::transport::optics::reflect;
 use crate::transport::ray_stack::RayStack;
 use crate::transport::scatter::scatter;
-use crate::transport::{Photons, SurfaceHit};
+use crate::transport::{Photons, SurfaceHit, SurfaceNormals};
 
 /// What the tracer returns per ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -169,8 +169,9 @@ impl<'a> Tracer<'a> {
     }
 
     /// Uses the surfaces' smooth-shading normals (`Surface::shading_normals`, the scene the mesh was
-    /// built from) for mirror, dielectric and highlight directions. The geometric normal still decides
-    /// the side hit and offsets ray origins.
+    /// built from) for mirror, dielectric and highlight directions and for the diffuse term's cosines
+    /// (direct light and final gather, `transport::shading`). The geometric normal still decides the
+    /// side hit, which light may arrive, and offsets ray origins.
     pub fn with_shading_normals(mut self, surfaces: &'a [Surface]) -> Self {
         self.surfaces = Some(surfaces);
         self
@@ -238,6 +239,23 @@ impl<'a> Tracer<'a> {
         self.surfaces
     }
 
+    /// The normals a diffuse hit is shaded with: geometric and, where the scene's surfaces give vertex
+    /// normals, the smooth one (as `SurfaceHit::with_shading_normal` sets it; `SurfaceHit::normals`).
+    pub fn smooth_normals(&self, hit: &SurfaceHit) -> SurfaceNormals {
+        match self.surfaces {
+            Some(surfaces) => SurfaceNormals {
+                geometric: hit.geometric_normal,
+                shading: self.mesh.smooth_normal(
+                    surfaces,
+                    hit.front_element as usize,
+                    hit.position,
+                    hit.geometric_normal,
+                ),
+            },
+            None => SurfaceNormals::flat(hit.geometric_normal),
+        }
+    }
+
     /// Per-pixel direct light from the emitters (shadow rays).
     pub fn direct_light(&self) -> &DirectLight<'a> {
         &self.direct
@@ -294,7 +312,8 @@ impl<'a> Tracer<'a> {
     ///
     /// with L_d the diffuse term (`Diffuse::radiance`: the Gouraud-interpolated radiosity B(p)/π, or
     /// with `DirectMode::Pixel` its indirect part plus direct light from shadow rays, see
-    /// `DirectLight::estimate`), the branches' weights from `transport::scatter` (R the unpolarised Fresnel
+    /// `DirectLight::estimate`, both with the smooth shading normal where the surface has vertex
+    /// normals), the branches' weights from `transport::scatter` (R the unpolarised Fresnel
     /// reflectance of a dielectric with index `Ni`), plus Phong highlights from the emitters. Rays
     /// deeper than `max_depth` or below `min_throughput` (`transport::scatter::carries`) are not
     /// traced; rays leaving the scene see black.
@@ -348,15 +367,13 @@ impl<'a> Tracer<'a> {
                 continue;
             };
             let material = &self.materials[hit.material as usize];
-            // The normal that bends specular rays (the geometric one unless smooth shading applies).
-            let hit = if mode == TraceMode::Final && material.is_specular() {
-                hit.with_shading_normal(mesh, self.surfaces, ray.dir)
-            } else {
-                hit
-            };
-            let (p, facing) = (hit.position, hit.geometric_normal);
+            // The smooth normal of the diffuse term and the one that bends specular rays (both the
+            // geometric one unless the surface has vertex normals).
+            let hit =
+                if mode == TraceMode::Final { hit.with_shading_normal(mesh, self.surfaces, ray.dir) } else { hit };
+            let (p, normals) = (hit.position, hit.normals());
             if let Some(parts) = record.parts().filter(|_| ray.depth == 0) {
-                parts.normal = hit.shading_normal;
+                parts.normal = hit.smooth_normal;
                 parts.depth = distance;
             }
 
@@ -385,7 +402,7 @@ impl<'a> Tracer<'a> {
                 let needs_light =
                     (self.diffuse.needs_direct_light() && reflectance.max_element() > 0.0) || highlight.is_some();
                 let light = if needs_light {
-                    self.direct.estimate(self.direct.light_samples(), p, facing, highlight, sampler, counts)
+                    self.direct.estimate(self.direct.light_samples(), p, normals, highlight, sampler, counts)
                 } else {
                     DirectEstimate::default()
                 };
@@ -397,7 +414,7 @@ impl<'a> Tracer<'a> {
                     _ => Vec3::ZERO,
                 };
                 let gathered = match &self.gather {
-                    Some(g) if reflectance.max_element() > 0.0 => Some(g.irradiance(self, p, facing, sampler, counts)),
+                    Some(g) if reflectance.max_element() > 0.0 => Some(g.irradiance(self, p, normals, sampler, counts)),
                     _ => None,
                 };
                 let diffuse = self.diffuse.radiance(

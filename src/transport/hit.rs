@@ -5,8 +5,9 @@
 use glam::{Vec2, Vec3};
 
 use crate::accel::Hit;
-use crate::mesh::{Mesh, NONE};
+use crate::mesh::{flat_within_tolerance, Mesh, NONE};
 use crate::scene::Surface;
+use crate::transport::shading::SurfaceNormals;
 
 /// Ray origins are moved off surfaces by this fraction of the scene's size (`scene_scale`): about
 /// 100 ulps of the coordinates of a scene near the origin, far below any feature size.
@@ -62,8 +63,14 @@ pub struct SurfaceHit {
     /// offsets new ray origins.
     pub geometric_normal: Vec3,
     /// The normal that bends specular rays: the geometric one unless `with_shading_normal` found the
-    /// surface's smooth-shading normal.
+    /// surface's smooth-shading normal (and it faces the arriving ray).
     pub shading_normal: Vec3,
+    /// The normal the diffuse term's cosines use (`normals`): the surface's interpolated vertex normal
+    /// turned to the side hit once `with_shading_normal` has looked (`Mesh::smooth_normal`), the
+    /// geometric one without vertex normals (or with a flat face's own). Unlike `shading_normal` it does not fall back where it
+    /// faces away from the ray: the Lambertian term does not depend on where the viewer is, and a
+    /// fallback there would draw the facets back in along a silhouette.
+    pub smooth_normal: Vec3,
     /// Index into `Mesh::triangles`.
     pub triangle: u32,
     /// The ray arrives on the side the triangle's normal points to.
@@ -117,6 +124,7 @@ impl SurfaceHit {
             position,
             geometric_normal: facing,
             shading_normal: facing,
+            smooth_normal: facing,
             triangle: hit.triangle,
             front,
             front_element,
@@ -129,20 +137,26 @@ impl SurfaceHit {
         }
     }
 
-    /// Sets the shading normal from the surfaces' smooth-shading normals (`Mesh::shading_normal`, the
-    /// scene the mesh was built from) for a ray arriving along `incoming`; keeps the geometric normal
-    /// without `surfaces`.
+    /// Sets, from the surfaces' vertex normals interpolated at the hit (`Mesh::interpolated_normal`;
+    /// `surfaces` is the scene the mesh was built from), the smooth normal (as `Mesh::smooth_normal`)
+    /// and the shading normal that bends specular rays for a ray arriving along `incoming`: the
+    /// interpolated normal n where n·incoming < 0, else the geometric one (a mirror direction would
+    /// point into the surface). Pass one's specular paths and pass two's
+    /// Whitted rays both bend by this rule. Keeps the geometric normal without `surfaces`.
     pub fn with_shading_normal(mut self, mesh: &Mesh, surfaces: Option<&[Surface]>, incoming: Vec3) -> SurfaceHit {
         if let Some(surfaces) = surfaces {
-            self.shading_normal = mesh.shading_normal(
-                surfaces,
-                self.front_element as usize,
-                self.position,
-                self.geometric_normal,
-                incoming,
-            );
+            let (facing, element) = (self.geometric_normal, self.front_element as usize);
+            let interpolated = mesh.interpolated_normal(surfaces, element, self.position, facing);
+            self.shading_normal = if interpolated.dot(incoming) < 0.0 { interpolated } else { facing };
+            self.smooth_normal = flat_within_tolerance(interpolated, facing);
         }
         self
+    }
+
+    /// The normals the diffuse term is shaded with at this hit: geometric and smooth
+    /// (`transport::shading`).
+    pub fn normals(&self) -> SurfaceNormals {
+        SurfaceNormals { geometric: self.geometric_normal, shading: self.smooth_normal }
     }
 
     /// How many uv units one unit of length on the hit triangle spans: √(A_uv / A_world), with A_uv and

@@ -62,6 +62,32 @@ pub struct HemisphereEstimate {
     pub translation_gradient: [Vec3; 3],
 }
 
+/// Gives the cells a gather did not trace (`traced[c]` false: below the facet's plane, see
+/// `Tracer::gather`) the traced cells' mean radiance, L_c = (1/T) Σ_traced L, and their harmonic mean
+/// distance, r_c = T / Σ_traced 1/r (infinite if none is finite), T the number traced. The irradiance
+/// π/(MN) Σ L is then π·(1/T) Σ_traced L (the traced cells share the lobe between them), and the
+/// harmonic mean distance over all cells is the traced cells'. Leaves everything as it is when every
+/// cell was traced, and zero radiance when none was.
+pub fn fill_untraced(radiance: &mut [Vec3], distance: &mut [f32], traced: &[bool]) {
+    let count = traced.iter().filter(|&&t| t).count();
+    if count == traced.len() {
+        return;
+    }
+    let (mut sum, mut inverse_distance_sum) = (Vec3::ZERO, 0.0f32);
+    for c in (0..traced.len()).filter(|&c| traced[c]) {
+        sum += radiance[c];
+        if distance[c].is_finite() && distance[c] > 0.0 {
+            inverse_distance_sum += 1.0 / distance[c];
+        }
+    }
+    let mean = if count > 0 { sum / count as f32 } else { Vec3::ZERO };
+    let harmonic = if inverse_distance_sum > 0.0 { count as f32 / inverse_distance_sum } else { f32::INFINITY };
+    for c in (0..traced.len()).filter(|&c| !traced[c]) {
+        radiance[c] = mean;
+        distance[c] = harmonic;
+    }
+}
+
 /// The estimate from cell radiances `radiance[j·N + k]` and hit distances `distance[j·N + k]`
 /// (infinite where a ray left the scene), in the frame (t, b, n) of the normal n:
 ///
@@ -202,6 +228,31 @@ mod tests {
         assert!((e.irradiance.x - 2.0 * PI).abs() < 1e-4);
         assert!((e.harmonic_distance - 3.0).abs() < 1e-4);
         assert!(e.rotation_gradient[0].length() < 1e-4 && e.translation_gradient[0].length() < 1e-4);
+    }
+
+    #[test]
+    fn untraced_cells_take_the_traced_mean_and_keep_a_uniform_sky_exact() {
+        let strata = Strata::for_rays(64);
+        let cells = strata.cells();
+        let mut l = vec![Vec3::splat(2.0); cells];
+        let mut r = vec![3.0; cells];
+        let traced: Vec<bool> = (0..cells).map(|c| c % 7 != 3).collect();
+        for c in (0..cells).filter(|&c| !traced[c]) {
+            (l[c], r[c]) = (Vec3::ZERO, f32::INFINITY);
+        }
+        fill_untraced(&mut l, &mut r, &traced);
+        let e = estimate(strata, &l, &r, Vec3::Z);
+        assert!((e.irradiance.x - 2.0 * PI).abs() < 1e-4 && (e.harmonic_distance - 3.0).abs() < 1e-4);
+        assert!(e.rotation_gradient[0].length() < 1e-4 && e.translation_gradient[0].length() < 1e-4);
+        // Traced cells of 1 and 3 in equal numbers (an even run of cells at the end): the untraced
+        // ones read 2, the traced keep their values.
+        let mut l: Vec<Vec3> = (0..cells).map(|c| Vec3::splat(if c % 2 == 0 { 1.0 } else { 3.0 })).collect();
+        let untraced = 4 + cells % 2;
+        let traced: Vec<bool> = (0..cells).map(|c| c >= untraced).collect();
+        let before = l.clone();
+        fill_untraced(&mut l, &mut vec![1.0; cells], &traced);
+        assert!(l[..untraced].iter().all(|&v| v == Vec3::splat(2.0)));
+        assert_eq!(l[untraced..], before[untraced..]);
     }
 
     #[test]

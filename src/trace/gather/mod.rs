@@ -25,6 +25,7 @@ use crate::film::Sampler;
 use crate::scene::{ImageSettings, RenderParams};
 use crate::trace::camera::PinholeCamera;
 use crate::trace::whitted::{RayCounts, Tracer};
+use crate::transport::shading::SurfaceNormals;
 
 /// The final gather for one image through `camera` as `params` ask: strata for `gather_rays`, and
 /// unless `cache_accuracy` is 0 the cache filled by `prepass::fill` (seeded by the image's seed),
@@ -77,8 +78,8 @@ pub struct FinalGather {
 }
 
 impl FinalGather {
-    /// The indirect irradiance at diffuse point `p` with normal `n`: the cache's interpolation where a
-    /// record serves, else a gather of its own (drawn from the pixel's `sampler`, not stored, so the
+    /// The indirect irradiance at diffuse point `p` with `normals` (see `Tracer::gather`): the cache's
+    /// interpolation where a record serves, else a gather of its own (drawn from the pixel's `sampler`, not stored, so the
     /// image does not depend on which thread got there first).
     ///
     /// A pixel's adaptive samples (`Sampler::is_adaptive`) land where the base samples disagreed:
@@ -88,11 +89,22 @@ impl FinalGather {
     /// M × N (each cell's jitter is uniform over it), so only its variance grows, about 4×; the pixel
     /// averages that gather with its other samples (tens of them in an adaptive pixel), whose own
     /// noise (edges, direct light) is what sent it to the adaptive pass.
-    pub fn irradiance(&self, tracer: &Tracer, p: Vec3, n: Vec3, sampler: &mut Sampler, counts: &mut RayCounts) -> Vec3 {
-        if let Some(e) = self.cache.as_ref().and_then(|c| c.lookup(p, n)) {
+    ///
+    /// Records are keyed by the shading normal (`prepass`), so on a smooth surface Ward's weight and
+    /// the rotation gradient follow the normal the lobe is built around, not the facets.
+    pub fn irradiance(
+        &self,
+        tracer: &Tracer,
+        p: Vec3,
+        normals: impl Into<SurfaceNormals>,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> Vec3 {
+        let normals = normals.into();
+        if let Some(e) = self.cache.as_ref().and_then(|c| c.lookup(p, normals.shading)) {
             return e;
         }
         let strata = if sampler.is_adaptive() { self.adaptive_strata } else { self.strata };
-        tracer.gather(p, n, strata, sampler, counts).irradiance
+        tracer.gather(p, normals, strata, sampler, counts).irradiance
     }
 }

@@ -49,7 +49,9 @@ impl Tracer<'_> {
     /// E_direct from `NEAR_LIGHT_SAMPLES` shadow rays (`DirectLight::irradiance`), H = π/(MN) Σ L_jk a
     /// secondary gather over `near.strata` whose rays read the interpolated solution
     /// (`gather_radiance` without a further near bounce). The solution's errors then enter one bounce
-    /// further away, damped by ρ.
+    /// further away, damped by ρ. On a smooth surface both take its shading normal, guarded by the
+    /// geometric one as at the camera's hits (`Tracer::gather`: H = π/T Σ over the T cells above the
+    /// facet's plane).
     pub fn near_exitance(
         &self,
         hit: &SurfaceHit,
@@ -62,20 +64,27 @@ impl Tracer<'_> {
         if reflectance.max_element() <= 0.0 {
             return Vec3::ZERO;
         }
-        let (x, n) = (hit.position, hit.geometric_normal);
-        let direct = self.direct_light().estimate(NEAR_LIGHT_SAMPLES, x, n, None, sampler, counts).irradiance;
+        let x = hit.position;
+        let normals = self.smooth_normals(hit);
+        let direct = self.direct_light().estimate(NEAR_LIGHT_SAMPLES, x, normals, None, sampler, counts).irradiance;
+        let n = normals.shading;
         let (t, b) = frame(n);
-        let origin = leave_surface(x, n, self.ray_offset());
+        let origin = leave_surface(x, normals.geometric, self.ray_offset());
         let strata = near.strata;
         let mut sum = Vec3::ZERO;
+        let mut traced = 0;
         for j in 0..strata.rings {
             for k in 0..strata.sectors {
                 let local = strata.direction(j, k, sampler.next_1d(), sampler.next_1d());
                 let dir = (t * local.x + b * local.y + n * local.z).normalize();
-                sum += self.gather_radiance(origin, dir, None, sampler, counts).0;
+                if normals.admits(dir) {
+                    sum += self.gather_radiance(origin, dir, None, sampler, counts).0;
+                    traced += 1;
+                }
             }
         }
-        let indirect = sum * (PI / strata.cells() as f32);
+        // Cells below the geometric plane give their share to the traced ones, as in `Tracer::gather`.
+        let indirect = if traced > 0 { sum * (PI / traced as f32) } else { Vec3::ZERO };
         reflectance * (direct + indirect)
     }
 }

@@ -15,6 +15,7 @@ use crate::trace::camera::PinholeCamera;
 use crate::trace::whitted::{RayCounts, Tracer};
 use crate::transport::ray_stack::RayStack;
 use crate::transport::scatter::scatter;
+use crate::transport::shading::SurfaceNormals;
 
 /// Grid spacings of the levels, in pixels.
 const LEVEL_SPACINGS_PX: [u32; LEVELS] = [32, 16, 8, 4, 2, 1];
@@ -36,7 +37,8 @@ const PREPASS_STREAM: u64 = 0x9a7e_u64 << 48;
 #[derive(Clone, Copy, Debug)]
 struct Candidate {
     position: Vec3,
-    normal: Vec3,
+    /// Geometric and smooth shading normals; the record is keyed by the shading one.
+    normals: SurfaceNormals,
     path_length: f32,
 }
 
@@ -81,7 +83,7 @@ pub fn fill(
                 let ray = camera.ray(x, y);
                 let mut c = RayCounts::default();
                 let points = candidates(tracer, ray.origin, ray.dir, &mut c);
-                (points.into_iter().filter(|p| !cache.covers(p.position, p.normal)).collect(), c)
+                (points.into_iter().filter(|p| !cache.covers(p.position, p.normals.shading)).collect(), c)
             })
             .collect();
         let uncovered: Vec<Candidate> = found.iter().flat_map(|(p, _)| p.iter().copied()).collect();
@@ -93,7 +95,7 @@ pub fn fill(
                 let mut sampler = Sampler::independent(seed, PREPASS_STREAM + ((level as u64) << 32) + i as u64);
                 let mut c = RayCounts::default();
                 let (estimate, refined) =
-                    tracer.record_gather(p.position, p.normal, strata, refinement, &mut sampler, &mut c);
+                    tracer.record_gather(p.position, p.normals, strata, refinement, &mut sampler, &mut c);
                 (estimate, refined, c)
             })
             .collect();
@@ -102,7 +104,7 @@ pub fn fill(
             let footprint = p.path_length * pixel_angle_rad;
             cache.insert(
                 p.position,
-                p.normal,
+                p.normals.shading,
                 estimate,
                 MIN_REACH_PX * footprint / accuracy,
                 MAX_REACH_PX * footprint / accuracy,
@@ -130,9 +132,11 @@ fn candidates(tracer: &Tracer, origin: Vec3, dir: Vec3, counts: &mut RayCounts) 
         };
         let path_length = travelled[ray.depth as usize] + distance;
         let material = &tracer.materials()[hit.material as usize];
+        // The normals as the image's hits get them (`Tracer::radiance`).
+        let hit = hit.with_shading_normal(tracer.mesh(), tracer.surfaces(), ray.dir);
         if let Some(element) = hit.element {
             if tracer.mesh().elements.reflectance[element as usize].max_element() > 0.0 {
-                out.push(Candidate { position: hit.position, normal: hit.geometric_normal, path_length });
+                out.push(Candidate { position: hit.position, normals: hit.normals(), path_length });
             }
         } else if !material.is_dielectric() {
             continue;
@@ -141,7 +145,6 @@ fn candidates(tracer: &Tracer, origin: Vec3, dir: Vec3, counts: &mut RayCounts) 
             continue;
         }
         travelled[ray.depth as usize + 1] = path_length;
-        let hit = hit.with_shading_normal(tracer.mesh(), tracer.surfaces(), ray.dir);
         stack.push_branches(
             &ray,
             &scatter(material, ray.dir, &hit),

@@ -7,45 +7,73 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::hemisphere::{estimate, frame, HemisphereEstimate, Strata};
+use super::hemisphere::{estimate, fill_untraced, frame, HemisphereEstimate, Strata};
 use super::near::NearBounce;
 use crate::film::Sampler;
 use crate::trace::whitted::{RayCounts, Tracer};
 use crate::transport::hit::leave_surface;
 use crate::transport::ray_stack::RayStack;
 use crate::transport::scatter::scatter;
+use crate::transport::shading::SurfaceNormals;
 
 /// Specular bounces a gather ray follows (mirror, glass) before it stops.
 pub const GATHER_SPECULAR_DEPTH: u32 = 4;
 const GATHER_STACK: usize = GATHER_SPECULAR_DEPTH as usize + 2;
 
 impl Tracer<'_> {
-    /// The gather at point `p` with unit normal `n` (the side being shaded) over `strata`, one jittered
-    /// ray per cell (`gather_radiance`), and its irradiance, harmonic mean distance and gradients
+    /// The gather at point `p` with unit normals `normals` (the side being shaded: a `Vec3` for a flat
+    /// point, else geometric and smooth shading normals) over `strata`, one jittered ray per cell
+    /// (`gather_radiance`), and its irradiance, harmonic mean distance and gradients
     /// (`hemisphere::estimate`). The irradiance is the indirect part: light from the emitters along
     /// straight lines is left out; what arrives through mirrors and glass is in. Near hits get the
     /// tracer's second bounce (`[render] near_bounce`, see `near`).
+    ///
+    /// With a shading normal n_s the cells are cosine-weighted around n_s (the Lambertian lobe of the
+    /// smooth surface) and rays leave along the geometric normal n_g. A cell whose direction lies
+    /// below the geometric plane (n_g·ω ≤ 0: a sliver of the outer rings on the side n_s leans away
+    /// from) is not traced: light cannot arrive through the facet. Its share of the lobe goes to the
+    /// traced cells (`hemisphere::fill_untraced`: it reads their mean radiance), so the estimate is
+    /// E = π·(1/T) Σ_traced L_jk, T the cells traced: the Lambertian integral over the directions
+    /// above the facet renormalised to the whole lobe, ∫_{n_g·ω>0} L max(0, n_s·ω) dω / c with
+    /// c = (1 + n_s·n_g)/2 its share there, as the direct light weighs it (`SurfaceNormals::cosine`).
+    /// Under uniform radiance L it is πL exactly, at every tilt: a white furnace stays exact.
+    /// Counting the cell as zero and dividing the sum by c instead would be unbiased too, but a cell
+    /// the plane cuts then reads all or nothing: at the corners of a coarse sphere (n_s 30° off the
+    /// facet) some 25 of 256 cells straddle the plane, and a furnace's pixels scattered by ±1%
+    /// (tests/shading_normals.rs) where the mean gives 0; the cache's gradients would also see a
+    /// dark horizon that is not there. The mean is a ratio estimator: its bias, O(1/T) where the
+    /// field varies, is far below the gather's own noise.
     pub fn gather(
         &self,
         p: Vec3,
-        n: Vec3,
+        normals: impl Into<SurfaceNormals>,
         strata: Strata,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> HemisphereEstimate {
+        let normals = normals.into();
+        let n = normals.shading;
         let (t, b) = frame(n);
-        let origin = leave_surface(p, n, self.ray_offset());
+        let origin = leave_surface(p, normals.geometric, self.ray_offset());
         let mut radiance = Vec::with_capacity(strata.cells());
         let mut distance = Vec::with_capacity(strata.cells());
+        let mut traced = Vec::with_capacity(strata.cells());
         for j in 0..strata.rings {
             for k in 0..strata.sectors {
                 let local = strata.direction(j, k, sampler.next_1d(), sampler.next_1d());
                 let dir = (t * local.x + b * local.y + n * local.z).normalize();
-                let (l, r) = self.gather_radiance(origin, dir, self.near_bounce(), sampler, counts);
+                let admitted = normals.admits(dir);
+                let (l, r) = if admitted {
+                    self.gather_radiance(origin, dir, self.near_bounce(), sampler, counts)
+                } else {
+                    (Vec3::ZERO, f32::INFINITY)
+                };
                 radiance.push(l);
                 distance.push(r);
+                traced.push(admitted);
             }
         }
+        fill_untraced(&mut radiance, &mut distance, &traced);
         estimate(strata, &radiance, &distance, n)
     }
 

@@ -7,10 +7,11 @@
 
 use glam::Vec3;
 
-use super::hemisphere::{frame, relative_error, HemisphereEstimate, Strata};
+use super::hemisphere::{fill_untraced, frame, relative_error, HemisphereEstimate, Strata};
 use crate::film::Sampler;
 use crate::trace::whitted::{RayCounts, Tracer};
 use crate::transport::hit::leave_surface;
+use crate::transport::shading::SurfaceNormals;
 
 /// Rays of the pilot gather (an 5 × 13 stratification).
 pub const PILOT_RAYS: u32 = 64;
@@ -52,21 +53,39 @@ impl GatherRefinement {
 impl Tracer<'_> {
     /// The relative standard error of a pilot gather over `strata` at (p, n) (`hemisphere::relative_error`),
     /// its rays reading the interpolated solution (no second bounce at near hits).
-    pub fn pilot_error(&self, p: Vec3, n: Vec3, strata: Strata, sampler: &mut Sampler, counts: &mut RayCounts) -> f32 {
+    /// Cells below the geometric plane are not traced and read the traced cells' mean, as in `gather`.
+    pub fn pilot_error(
+        &self,
+        p: Vec3,
+        normals: impl Into<SurfaceNormals>,
+        strata: Strata,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> f32 {
+        let normals = normals.into();
+        let n = normals.shading;
         let (t, b) = frame(n);
-        let origin = leave_surface(p, n, self.ray_offset());
+        let origin = leave_surface(p, normals.geometric, self.ray_offset());
         let mut radiance = Vec::with_capacity(strata.cells());
+        let mut traced = Vec::with_capacity(strata.cells());
         for j in 0..strata.rings {
             for k in 0..strata.sectors {
                 let local = strata.direction(j, k, sampler.next_1d(), sampler.next_1d());
                 let dir = (t * local.x + b * local.y + n * local.z).normalize();
-                radiance.push(self.gather_radiance(origin, dir, None, sampler, counts).0);
+                let admitted = normals.admits(dir);
+                radiance.push(if admitted {
+                    self.gather_radiance(origin, dir, None, sampler, counts).0
+                } else {
+                    Vec3::ZERO
+                });
+                traced.push(admitted);
             }
         }
+        fill_untraced(&mut radiance, &mut vec![f32::INFINITY; strata.cells()], &traced);
         relative_error(strata, &radiance)
     }
 
-    /// A record's gather at (p, n): over `base`, or, where `refinement`'s pilot predicts a relative error
+    /// A record's gather at p with `normals` (`gather`): over `base`, or, where `refinement`'s pilot predicts a relative error
     /// above its bound, over its `refined` strata; and whether it was refined. Unbiased either way: the
     /// pilot draws from its own stream forked off `sampler` (which it leaves untouched), independent of
     /// the kept gather's, and each stratified gather is unbiased at any M × N. A record kept at `base`
@@ -74,20 +93,21 @@ impl Tracer<'_> {
     pub fn record_gather(
         &self,
         p: Vec3,
-        n: Vec3,
+        normals: impl Into<SurfaceNormals>,
         base: Strata,
         refinement: Option<&GatherRefinement>,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> (HemisphereEstimate, bool) {
+        let normals = normals.into();
         let refine = refinement.is_some_and(|r| {
-            let pilot = self.pilot_error(p, n, r.pilot, &mut sampler.fork(PILOT_STREAM), counts);
+            let pilot = self.pilot_error(p, normals, r.pilot, &mut sampler.fork(PILOT_STREAM), counts);
             r.predicted_error(pilot, base) > r.error_bound
         });
         let strata = match refinement {
             Some(r) if refine => r.refined,
             _ => base,
         };
-        (self.gather(p, n, strata, sampler, counts), refine)
+        (self.gather(p, normals, strata, sampler, counts), refine)
     }
 }
