@@ -5,7 +5,9 @@
 //! jump at every facet edge and the object renders as flat bands. Welded, a vertex on a smooth facet
 //! edge takes the mean of the elements on both sides, and only a group's outline (a crease, a material
 //! change, an open edge) is extrapolated. A box's faces are groups of one surface each, so their
-//! vertex values do not change.
+//! vertex values do not change. Coplanar pieces of a group (a floor cut along furniture, a quad split
+//! into triangles) weld at a point only where their own values agree: a sharp shadow edge lying on
+//! their border stays a step (`SmoothMesh::vertex_values`); facets of a curved surface always weld.
 
 use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
