@@ -100,3 +100,94 @@ fn box_faces_and_material_changes_keep_their_own_values() {
     assert_eq!(SmoothMesh::new(&mesh).group_count(), 7);
     assert_eq!(per_surface, smooth);
 }
+
+/// The largest spread of values at one point over the mesh vertices there (any field, any channel x).
+fn largest_jump(mesh: &Mesh, values: &[Vec3]) -> f64 {
+    let mut at_point: std::collections::HashMap<[i32; 3], (f64, f64)> = Default::default();
+    for (p, v) in mesh.positions.iter().zip(values) {
+        let e = at_point.entry((*p * 1e4).round().as_ivec3().to_array()).or_insert((f64::MAX, f64::MIN));
+        e.0 = e.0.min(v.x as f64);
+        e.1 = e.1.max(v.x as f64);
+    }
+    at_point.values().map(|(lo, hi)| hi - lo).fold(0.0, f64::max)
+}
+
+/// A floor piece in the plane y = 0 over [x0, x1] × [z0, z1], facing +y.
+fn floor_piece(x0: f32, x1: f32, z0: f32, z1: f32) -> Surface {
+    let v = |x: f32, z: f32| Vec3::new(x, 0.0, z);
+    common::surface(vec![v(x0, z0), v(x0, z1), v(x1, z1), v(x1, z0)], 0, false)
+}
+
+#[test]
+fn a_shadow_edge_on_a_border_between_coplanar_pieces_keeps_its_step() {
+    // A floor cut at z = 1 (as a floor is cut along a pillar's face): lit on z < 1, in the pillar's
+    // sharp shadow on z > 1. Each side is linear in x, so each side's own extrapolation to the border
+    // is exact: the step must survive at the shared vertices, not be averaged to its middle.
+    let lit = |x: f32| 1.0 + 0.2 * x as f64;
+    let shadow = |x: f32| 0.1 + 0.02 * x as f64;
+    let mesh = mesh_of(vec![floor_piece(0.0, 1.0, 0.0, 1.0), floor_piece(0.0, 1.0, 1.0, 2.0)], 1, 0.25);
+    let element: Vec<DVec3> =
+        mesh.elements.centre.iter().map(|&c| DVec3::splat(if c.z < 1.0 { lit(c.x) } else { shadow(c.x) })).collect();
+    let smooth = SmoothMesh::new(&mesh);
+    assert_eq!(smooth.group_count(), 1, "coplanar pieces of one material are one smoothing group");
+    let values = smooth.vertex_values(&element);
+    let mut on_border = 0;
+    for (v, p) in mesh.positions.iter().enumerate() {
+        if (p.z - 1.0).abs() > 1e-6 {
+            continue;
+        }
+        on_border += 1;
+        let side_is_lit = mesh
+            .elements
+            .corners
+            .iter()
+            .enumerate()
+            .any(|(e, c)| c.contains(&(v as u32)) && mesh.elements.centre[e].z < 1.0);
+        let expected = if side_is_lit { lit(p.x) } else { shadow(p.x) };
+        // f32 arithmetic of the fit: a few ulps of values near 1.
+        assert!(
+            (values[v].x as f64 - expected).abs() < 1e-5,
+            "vertex {p} of the {} side: {} vs {expected}",
+            if side_is_lit { "lit" } else { "shadowed" },
+            values[v].x
+        );
+    }
+    assert_eq!(on_border, 10, "five border points, one vertex per piece");
+}
+
+#[test]
+fn a_triangulated_quad_under_a_lamp_shows_no_seam_on_its_diagonal() {
+    // A unit floor square split into two triangles (as every exporter triangulates a floor), lit by a
+    // point lamp 0.5 above (0.3, 0, 0.6): irradiance h/(h² + r²)^{3/2}, smooth but far from linear
+    // (a factor of about 8 from the peak to the far corner). Both halves extrapolate the same smooth
+    // field to nearly one value on the diagonal, so they weld: one value per point.
+    let field = |p: Vec3| {
+        let r2 = (p.x - 0.3).powi(2) + (p.z - 0.6).powi(2);
+        0.125 / (0.25 + r2 as f64).powf(1.5)
+    };
+    let v = |x: f32, z: f32| Vec3::new(x, 0.0, z);
+    let triangles = vec![
+        common::surface(vec![v(0.0, 0.0), v(0.0, 1.0), v(1.0, 1.0)], 0, false),
+        common::surface(vec![v(0.0, 0.0), v(1.0, 1.0), v(1.0, 0.0)], 0, false),
+    ];
+    let mesh = mesh_of(triangles, 1, 0.125);
+    let element: Vec<DVec3> = mesh.elements.centre.iter().map(|&c| DVec3::splat(field(c))).collect();
+    let (per_surface, smooth) = both_steps(&mesh, &element);
+    // Their own values differ by about 1% of the peak (0.012 of 0.97): well inside `AGREE_RELATIVE`.
+    assert!(largest_jump(&mesh, &per_surface) > 0.005, "the halves' own values differ on the diagonal");
+    assert_eq!(largest_jump(&mesh, &smooth), 0.0, "one value per point on the diagonal");
+}
+
+#[test]
+fn a_sphere_with_a_sharp_terminator_stays_continuous() {
+    // A step across facet edges (lit above the equator, dark below): facets of a curved surface are
+    // always welded, so the sphere never shows its facets, whatever the solution does there.
+    let surfaces: Vec<Surface> =
+        sphere_triangles(Vec3::ZERO, 1.0, 24).into_iter().map(|(t, _)| common::surface(t.to_vec(), 0, false)).collect();
+    let mesh = mesh_of(surfaces, 1, 10.0);
+    let element: Vec<DVec3> =
+        mesh.elements.centre.iter().map(|&c| DVec3::splat(if c.y > 0.0 { field(c) } else { 0.05 })).collect();
+    let (per_surface, smooth) = both_steps(&mesh, &element);
+    assert!(largest_jump(&mesh, &per_surface) > 0.5, "the per-surface step jumps at the terminator");
+    assert_eq!(largest_jump(&mesh, &smooth), 0.0, "one value per point across facet edges");
+}

@@ -5,7 +5,9 @@
 //! jump at every facet edge and the object renders as flat bands. Welded, a vertex on a smooth facet
 //! edge takes the mean of the elements on both sides, and only a group's outline (a crease, a material
 //! change, an open edge) is extrapolated. A box's faces are groups of one surface each, so their
-//! vertex values do not change.
+//! vertex values do not change. Coplanar pieces of a group (a floor cut along furniture, a quad split
+//! into triangles) weld at a point only where their own values agree: a sharp shadow edge lying on
+//! their border stays a step (`SmoothMesh::vertex_values`); facets of a curved surface always weld.
 
 use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
@@ -137,6 +139,31 @@ fn surface_facet(mesh: &Mesh, s: usize, outline: &SurfaceOutlines, point: &[u32]
     }
 }
 
+/// Coplanar pieces' own values at a shared point agree when, per channel, they differ by at most this
+/// fraction of the larger of the two ... A smooth field's extrapolations from two sides differ by its
+/// curvature over an element (about 1% of the peak under a lamp half a floor away,
+/// `tests/smooth_mesh.rs`); a sharp shadow edge's by most of the lit value. Measured on alcove_hall
+/// (2026-12-02, docs/accuracy.md): any value from 0.25 to 0.4 gives the same image, 0.5 welds the
+/// pillar's shadow edge again (0.609 against 0.382 beside the pillar's foot).
+pub const AGREE_RELATIVE: f64 = 0.3;
+
+/// ... plus this fraction of the brightest reflected value (the largest channel over the elements that
+/// emit nothing), so that dark corners, where any difference is a large fraction, still weld.
+pub const AGREE_FLOOR: f64 = 0.03;
+
+/// Normals of mesh vertices at one point with n₁·n₂ above this are coplanar pieces of one plane (a floor
+/// cut along furniture, a quad split into triangles); below it, facets of a curved surface.
+const COPLANAR_COS: f32 = 0.9999;
+
+/// Per-surface values `a` and `b` at one point agree (`AGREE_RELATIVE`, `AGREE_FLOOR`, with `floor`
+/// the latter's absolute value): |a − b| ≤ r·max(a, b) + floor in every channel.
+fn agree(a: Vec3, b: Vec3, floor: f64) -> bool {
+    (0..3).all(|k| {
+        let (a, b) = (a[k] as f64, b[k] as f64);
+        (a - b).abs() <= AGREE_RELATIVE * a.max(b) + floor
+    })
+}
+
 /// A `Mesh` with its vertices welded within smoothing groups (see module docs), as an `ElementMesh`.
 pub struct SmoothMesh<'a> {
     mesh: &'a Mesh,
@@ -150,6 +177,18 @@ pub struct SmoothMesh<'a> {
     /// edge cut where a vertex of its group sits at its midpoint: the adaptive mesh's T-junctions, and
     /// a facet edge that its neighbour's finer grid splits).
     boundary: Vec<bool>,
+    /// Per mesh vertex: it lies on its surface side's outline (the per-surface step's boundary, a split
+    /// edge's midpoint, `Mesh::split_edge_midpoints`, not taken for one).
+    surface_boundary: Vec<bool>,
+    /// The welded vertices where coplanar pieces meet (two of their mesh vertices have normals within
+    /// `COPLANAR_COS`), each with its mesh vertices: `members[start[k]..start[k + 1]]` for `seams[k]`.
+    seams: Vec<u32>,
+    seam_start: Vec<u32>,
+    seam_members: Vec<u32>,
+    /// Per mesh vertex: the normal of its surface side, and the area of the unburied elements around it
+    /// (its weight where the values of several pieces are averaged).
+    vertex_normal: Vec<Vec3>,
+    vertex_area: Vec<f64>,
 }
 
 impl<'a> SmoothMesh<'a> {
@@ -182,7 +221,24 @@ impl<'a> SmoothMesh<'a> {
                 })
             })
             .collect();
-        let mut smooth = SmoothMesh { mesh, positions, welded, group, boundary: Vec::new() };
+        let (vertex_normal, vertex_area) = vertex_normals_and_areas(mesh);
+        let (seams, seam_start, seam_members) = coplanar_seams(&welded, positions.len(), &vertex_normal);
+        let surface_boundary = boundary_vertices::boundary_vertices(mesh, &|a, b| {
+            mesh.split_edge_midpoints.get(&(a.min(b), a.max(b))).copied()
+        });
+        let mut smooth = SmoothMesh {
+            mesh,
+            positions,
+            welded,
+            group,
+            boundary: Vec::new(),
+            surface_boundary,
+            seams,
+            seam_start,
+            seam_members,
+            vertex_normal,
+            vertex_area,
+        };
         let midpoint = |a: u32, b: u32| {
             let mid = (smooth.positions[a as usize] + smooth.positions[b as usize]) * 0.5;
             let m = *welded_of.get(&(welded_group[a as usize], points.find(mid)?))?;
@@ -195,10 +251,63 @@ impl<'a> SmoothMesh<'a> {
 
     /// Per mesh vertex: the vertex step's value (`boundary_vertices::vertex_values` over the welded
     /// mesh: the area mean of the unburied elements around a vertex inside a smoothing group, the
-    /// clamped linear extrapolation on its outline).
+    /// clamped linear extrapolation on its outline), except where the solution is discontinuous on a
+    /// border between coplanar pieces.
+    ///
+    /// The rule at a point where coplanar pieces of a group meet (a seam, `COPLANAR_COS`): each piece
+    /// has its own value there, the per-surface step's (its surface's elements extrapolated to its
+    /// outline). Pieces are joined when their own values agree (`agree`: within `AGREE_RELATIVE` of
+    /// the larger plus `AGREE_FLOOR` of the brightest reflected value) and always across a curved
+    /// facet edge (normals apart), the join taken transitively. If that joins every piece at the
+    /// point, the welded value stands: a triangulated quad's halves extrapolate one smooth field to
+    /// nearly one value and stay seamless. Else the point is a discontinuity line of the solution
+    /// (a sharp shadow edge lying on the border, as the floor cut along a pillar's faces has it) and
+    /// each joined set of pieces takes the area-weighted mean of its pieces' own values, so that the
+    /// step survives instead of being averaged into a bright shadow and a dark light beside it.
     pub fn vertex_values(&self, element_values: &[DVec3]) -> Vec<Vec3> {
         let welded = boundary_vertices::vertex_values(self, element_values, &self.boundary);
-        self.welded.iter().map(|&w| welded[w as usize]).collect()
+        let mut values: Vec<Vec3> = self.welded.iter().map(|&w| welded[w as usize]).collect();
+        if self.seams.is_empty() {
+            return values;
+        }
+        let own = boundary_vertices::vertex_values(self.mesh, element_values, &self.surface_boundary);
+        let e = &self.mesh.elements;
+        let brightest = (0..e.len().min(element_values.len()))
+            .filter(|&i| e.emission[i] == Vec3::ZERO && !self.buried(i))
+            .map(|i| element_values[i].max_element())
+            .fold(0.0f64, f64::max);
+        let floor = AGREE_FLOOR * brightest;
+        let mut parent = Vec::new();
+        for k in 0..self.seams.len() {
+            let members = &self.seam_members[self.seam_start[k] as usize..self.seam_start[k + 1] as usize];
+            parent.clear();
+            parent.extend(0..members.len() as u32);
+            for i in 0..members.len() {
+                for j in i + 1..members.len() {
+                    let (a, b) = (members[i] as usize, members[j] as usize);
+                    let curved = self.vertex_normal[a].dot(self.vertex_normal[b]) <= COPLANAR_COS;
+                    if curved || agree(own[a], own[b], floor) {
+                        let (ri, rj) = (root(&mut parent, i as u32), root(&mut parent, j as u32));
+                        parent[ri.max(rj) as usize] = ri.min(rj);
+                    }
+                }
+            }
+            let roots: Vec<u32> = (0..members.len() as u32).map(|i| root(&mut parent, i)).collect();
+            if roots.iter().all(|&r| r == 0) {
+                continue;
+            }
+            for (i, &r) in roots.iter().enumerate() {
+                let (mut sum, mut weight) = (Vec3::ZERO, 0.0f64);
+                for (j, _) in roots.iter().enumerate().filter(|&(_, &s)| s == r) {
+                    let m = members[j] as usize;
+                    let w = self.vertex_area[m].max(f64::MIN_POSITIVE);
+                    sum += own[m] * w as f32;
+                    weight += w;
+                }
+                values[members[i] as usize] = sum / weight as f32;
+            }
+        }
+        values
     }
 
     /// Number of smoothing groups (a box-like scene: one per surface side).
@@ -208,6 +317,67 @@ impl<'a> SmoothMesh<'a> {
         groups.dedup();
         groups.len()
     }
+}
+
+/// Union-find root with path halving.
+fn root(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        let up = parent[parent[i as usize] as usize];
+        parent[i as usize] = up;
+        i = up;
+    }
+    i
+}
+
+/// Per mesh vertex: the normal of an element using it (every element of a surface side has its
+/// plane's), and the area of the unburied elements using it.
+fn vertex_normals_and_areas(mesh: &Mesh) -> (Vec<Vec3>, Vec<f64>) {
+    let e = &mesh.elements;
+    let mut normal = vec![Vec3::ZERO; mesh.positions.len()];
+    let mut area = vec![0.0f64; mesh.positions.len()];
+    for (i, c) in e.corners.iter().enumerate() {
+        let buried = mesh.element_buried.get(i).copied().unwrap_or(false);
+        for &v in c.iter().filter(|&&v| v != NONE) {
+            normal[v as usize] = e.normal[i];
+            if !buried {
+                area[v as usize] += e.area[i] as f64;
+            }
+        }
+    }
+    (normal, area)
+}
+
+/// The welded vertices (of `welded_count`; `welded`: per mesh vertex its welded vertex) where two mesh
+/// vertices with normals within `COPLANAR_COS` meet, in increasing order, and their mesh vertices as
+/// one flat list (`start`, `members`, as `SmoothMesh::seams`).
+fn coplanar_seams(welded: &[u32], welded_count: usize, normal: &[Vec3]) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+    let mut first = vec![0u32; welded_count + 1];
+    for &w in welded {
+        first[w as usize + 1] += 1;
+    }
+    for w in 0..welded_count {
+        first[w + 1] += first[w];
+    }
+    let mut next = first.clone();
+    let mut at = vec![0u32; welded.len()];
+    for (v, &w) in welded.iter().enumerate() {
+        at[next[w as usize] as usize] = v as u32;
+        next[w as usize] += 1;
+    }
+    let (mut seams, mut start, mut members) = (Vec::new(), vec![0u32], Vec::new());
+    for w in 0..welded_count {
+        let here = &at[first[w] as usize..first[w + 1] as usize];
+        let coplanar = here
+            .iter()
+            .enumerate()
+            .any(|(i, &a)| here[i + 1..].iter().any(|&b| normal[a as usize].dot(normal[b as usize]) > COPLANAR_COS));
+        if coplanar {
+            seams.push(w as u32);
+            members.extend_from_slice(here);
+            start.push(members.len() as u32);
+        }
+    }
+    (seams, start, members)
 }
 
 impl ElementMesh for SmoothMesh<'_> {
