@@ -7,37 +7,32 @@
 //! (Σ over the source's leaves of the element form factor × the leaf's exitance). A diagnostic for
 //! accuracy work on a scene.
 //!
-//! With `--object NAME` instead of a surface: per object of that name (every leaf element on its
-//! front input triangles), the power Σ A_open·G its leaves receive, split by how it lands (element
-//! link, cluster member shares, far arrival, near arrival, uniform) and into its direct part (the
-//! links' sources' emission E instead of B) and the rest, against the direct power a ray-traced
-//! reference gives (`reference_direct`: each leaf's exact element form factor to every emitting leaf
-//! times that leaf's E, visibility by rays from the leaf's three quadrature points to the emitter's).
-//!
-//! With `--link-bias [EVERY]`: every EVERY-th link's form factor against a 1024-sample reference
-//! (`visibility::sampled_form_factor`: unbiased, visibility included), the power A_R·B_S·F both
-//! give summed by link type: where the solve's transfer is biased.
-//!
-//! With `--sent NAME`: where the power object NAME sends lands, by receiving object: the links'
-//! A_R·F_RS (the source's share of each cluster by open area, the receiver's split by open area)
-//! against cosine-distributed rays from its leaves (the truth in a closed room).
+//! Reports per object (the scene's OBJ object names) instead of a surface:
+//! - `--object NAME...`: the form-factor sum of its leaves' links (1 in a closed room); the power
+//!   Σ A_open·G its leaves receive, split by how it lands (element link, cluster member shares, far
+//!   arrival, near arrival, uniform) and into its direct part (the sources' emission E instead of B)
+//!   and the rest, against ray-traced direct light (each leaf's exact element form factor to every
+//!   emitting leaf times its E, visibility by rays from the leaf's three quadrature points).
+//! - `--link-bias [EVERY] [RECEIVER_OBJECT SOURCE_OBJECT]`: every EVERY-th link's A_R·B_S·F against a
+//!   1024-sample `visibility::sampled_form_factor` (unbiased, visibility included), by link type;
+//!   with `LINK_BIAS_LEAVES` set the reference weights each source leaf by its own exitance.
+//! - `--sent NAME`: where the power NAME sends lands, by receiving object: the links' A_R·F_RS (a
+//!   cluster source's share by open area, the receiver's split by open area) against cosine rays.
+//! - `--gathered NAME...`: per leaf, the indirect irradiance the links push against cosine rays that
+//!   read the exitance of the leaf they hit (256 per leaf, emission left out of both): the same
+//!   exitance, so only the transfer and its spread over the members differ; by the leaves' normal
+//!   (facing down, sideways, up); `GATHERED_DETAIL` prints every leaf.
+//! - `--coverage NAME`: for every leaf of NAME (receiver) and every 16th leaf of the scene (source),
+//!   how many links join an ancestor-or-self of the one to an ancestor-or-self of the other (one, or
+//!   none where they cannot exchange light, is right): the unoccluded pair transfer of the pairs with
+//!   none (and their visible part by source object) and with two or more.
 //!
 //! usage: hierarchy_links SCENE.toml SURFACE [DEPTH] [MIN_ELEMENT_SIZE VISIBILITY_RAYS]
-//!        hierarchy_links SCENE.toml --link-bias [EVERY]
-//!        hierarchy_links SCENE.toml --sent NAME
-//!        hierarchy_links SCENE.toml --gathered NAME [NAME...]
-//!        hierarchy_links SCENE.toml --coverage NAME
-//!
-//! `--coverage`: for every leaf of object NAME (receiver) and every 16th leaf of the scene (source),
-//! how many links join an ancestor-or-self of the one to an ancestor-or-self of the other (exactly
-//! one, or none where the two cannot exchange light, is right); the unoccluded element-pair
-//! transfer A·F·B of the pairs with none and with two or more.
-//!
-//! `--gathered`: per object, its leaves' irradiance from the links (landed, as the sweep pushes it)
-//! against cosine-distributed rays that read the exitance of the leaf they hit (256 per leaf), both
-//! without emission (the indirect part only: direct is the `--object` report's): the same exitance, so only the transfer and its spread over the members are compared; by the leaves'
-//! normal (facing down, sideways, up).
-//!        hierarchy_links SCENE.toml --object NAME [NAME...]
+//!        hierarchy_links SCENE.toml --object|--gathered NAME [NAME...]
+//!        hierarchy_links SCENE.toml --link-bias [EVERY] [RECEIVER_OBJECT SOURCE_OBJECT]
+//!        hierarchy_links SCENE.toml --sent|--coverage NAME
+
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::process::ExitCode;
 
@@ -559,7 +554,7 @@ fn sent_by_object(scene: &radray::scene::SceneDescription, name: &str) -> ExitCo
     };
     let mut total = 0.0;
     for n in 0..nodes.len() {
-        if !(nodes.is_leaf(n) && !nodes.is_cluster[n]) || area[n * k + me] == 0.0 {
+        if !nodes.is_leaf(n) || nodes.is_cluster[n] || area[n * k + me] == 0.0 {
             continue;
         }
         let a = area[n * k + me];
