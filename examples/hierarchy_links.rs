@@ -7,7 +7,32 @@
 //! (Σ over the source's leaves of the element form factor × the leaf's exitance). A diagnostic for
 //! accuracy work on a scene.
 //!
+//! Reports per object (the scene's OBJ object names) instead of a surface:
+//! - `--object NAME...`: the form-factor sum of its leaves' links (1 in a closed room); the power
+//!   Σ A_open·G its leaves receive, split by how it lands (element link, cluster member shares, far
+//!   arrival, near arrival, uniform) and into its direct part (the sources' emission E instead of B)
+//!   and the rest, against ray-traced direct light (each leaf's exact element form factor to every
+//!   emitting leaf times its E, visibility by rays from the leaf's three quadrature points).
+//! - `--link-bias [EVERY] [RECEIVER_OBJECT SOURCE_OBJECT]`: every EVERY-th link's A_R·B_S·F against a
+//!   1024-sample `visibility::sampled_form_factor` (unbiased, visibility included), by link type;
+//!   with `LINK_BIAS_LEAVES` set the reference weights each source leaf by its own exitance.
+//! - `--sent NAME`: where the power NAME sends lands, by receiving object: the links' A_R·F_RS (a
+//!   cluster source's share by open area, the receiver's split by open area) against cosine rays.
+//! - `--gathered NAME...`: per leaf, the indirect irradiance the links push against cosine rays that
+//!   read the exitance of the leaf they hit (256 per leaf, emission left out of both): the same
+//!   exitance, so only the transfer and its spread over the members differ; by the leaves' normal
+//!   (facing down, sideways, up); `GATHERED_DETAIL` prints every leaf.
+//! - `--coverage NAME`: for every leaf of NAME (receiver) and every 16th leaf of the scene (source),
+//!   how many links join an ancestor-or-self of the one to an ancestor-or-self of the other (one, or
+//!   none where they cannot exchange light, is right): the unoccluded pair transfer of the pairs with
+//!   none (and their visible part by source object) and with two or more.
+//!
 //! usage: hierarchy_links SCENE.toml SURFACE [DEPTH] [MIN_ELEMENT_SIZE VISIBILITY_RAYS]
+//!        hierarchy_links SCENE.toml --object|--gathered NAME [NAME...]
+//!        hierarchy_links SCENE.toml --link-bias [EVERY] [RECEIVER_OBJECT SOURCE_OBJECT]
+//!        hierarchy_links SCENE.toml --sent|--coverage NAME
+
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::process::ExitCode;
 
@@ -30,6 +55,21 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    if args[2] == "--link-bias" {
+        return link_bias(&scene, args.get(3).and_then(|a| a.parse().ok()).unwrap_or(100), args.get(4), args.get(5));
+    }
+    if args[2] == "--gathered" {
+        return gathered_by_normal(&scene, &args[3..]);
+    }
+    if args[2] == "--coverage" {
+        return coverage(&scene, &args[3]);
+    }
+    if args[2] == "--sent" {
+        return sent_by_object(&scene, &args[3]);
+    }
+    if args[2] == "--object" {
+        return object_breakdown(&scene, &args[3..]);
+    }
     let surface: u32 = args[2].parse().unwrap_or(0);
     let depth: u8 = args.get(3).and_then(|d| d.parse().ok()).unwrap_or(2);
     let mut params = radray::radiosity::hierarchical::hierarchy_params(&scene);
@@ -151,4 +191,693 @@ fn main() -> ExitCode {
         }
     }
     ExitCode::SUCCESS
+}
+
+/// How a link's light lands on a leaf (see the module header).
+const KINDS: [&str; 5] = ["element", "member shares", "far arrival", "near arrival", "uniform"];
+
+/// The `--object` report.
+fn object_breakdown(scene: &radray::scene::SceneDescription, objects: &[String]) -> ExitCode {
+    use radray::radiosity::hierarchy::form_factor::quadrature_points;
+    use radray::transport::hit::leave_surface;
+    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
+    let scales = ArrivalScales::new(nodes, links);
+    // The scene's triangles for visibility rays.
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for s in &scene.surfaces {
+        let base = positions.len() as u32;
+        positions.extend_from_slice(&s.vertices);
+        for k in 1..s.vertices.len().saturating_sub(1) as u32 {
+            triangles.push([base, base + k, base + k + 1]);
+        }
+    }
+    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let offset = scene.diagonal() * 1e-5;
+    let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
+    let emitters: Vec<usize> = leaves.iter().copied().filter(|&n| nodes.emission[n].max_element() > 0.0).collect();
+    let mean = |v: DVec3| (v.x + v.y + v.z) / 3.0;
+    // Σ_R A_R·F_RS / A_open,S over the links from each node S: the share of its power its links
+    // deliver; a leaf's form-factor sum is that over itself and its ancestors (1 in a closed room).
+    let mut sent = vec![0.0f64; nodes.len()];
+    for r in 0..links.offsets.len().saturating_sub(1) {
+        for k in links.range(r) {
+            let s = links.source[k] as usize;
+            if nodes.open_area[s] > 0.0 {
+                sent[s] += nodes.area[r] as f64 * links.form_factor[k] as f64 / nodes.open_area[s] as f64;
+            }
+        }
+    }
+    let form_factor_sum = |e: usize| {
+        let (mut sum, mut up) = (0.0, e as u32);
+        while up != u32::MAX {
+            sum += sent[up as usize];
+            up = nodes.parent[up as usize];
+        }
+        sum
+    };
+    for name in objects {
+        // Area-weighted form-factor sum, and the share of the area below 0.97 and above 1.03.
+        let (mut sum, mut low, mut high, mut a_all) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        for &e in &leaves {
+            let input = nodes.input[e] as usize;
+            if inputs.back[input] || scene.surfaces[inputs.surface[input] as usize].object != *name {
+                continue;
+            }
+            let (a, f) = (nodes.open_area[e] as f64, form_factor_sum(e));
+            sum += a * f;
+            a_all += a;
+            if f < 0.97 {
+                low += a;
+            }
+            if f > 1.03 {
+                high += a;
+            }
+        }
+        println!(
+            "object {name}: form-factor sum over its leaves' links {:.4} (area below 0.97: {:.1}%, above 1.03: {:.1}%)",
+            sum / a_all.max(1e-30),
+            100.0 * low / a_all.max(1e-30),
+            100.0 * high / a_all.max(1e-30)
+        );
+    }
+    for name in objects {
+        // (direct, other) per kind; reference direct; area; Σ A·B.
+        let mut landed = [[0.0f64; 2]; 5];
+        let (mut reference, mut area, mut power_b) = (0.0f64, 0.0f64, 0.0f64);
+        for &e in &leaves {
+            let input = nodes.input[e] as usize;
+            let surface = inputs.surface[input] as usize;
+            if inputs.back[input] || scene.surfaces[surface].object != *name {
+                continue;
+            }
+            let open = nodes.open_area[e] as f64;
+            if !(open > 0.0) {
+                continue;
+            }
+            area += open;
+            power_b += open * mean(nodes.exitance[e]);
+            let member = inputs.node[input] as usize;
+            let mut up = e as u32;
+            while up != u32::MAX {
+                let a = up as usize;
+                for k in links.range(a) {
+                    let s = links.source[k] as usize;
+                    let f = links.form_factor[k] as f64;
+                    let (gain, kind) = if !nodes.is_cluster[a] {
+                        (nodes.open_gain(a), 0)
+                    } else if scales.has_shares(k) {
+                        (scales.shares(k).find(|&(m, _)| m == member).map_or(0.0, |(_, c)| c as f64), 1)
+                    } else {
+                        match arrival_direction(nodes, a, s) {
+                            Some(w) if scales.scale[k] > 0.0 => (
+                                scales.scale[k] as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
+                                if is_near(nodes, a, s) { 3 } else { 2 },
+                            ),
+                            _ => (nodes.open_gain(a), 4),
+                        }
+                    };
+                    let direct = mean(nodes.emission[s].as_dvec3()) * f * gain;
+                    let all = mean(nodes.exitance[s]) * f * gain;
+                    landed[kind][0] += open * direct;
+                    landed[kind][1] += open * (all - direct);
+                }
+                up = nodes.parent[a];
+            }
+            // Reference direct irradiance: exact element form factor × visibility from the
+            // quadrature points to the emitting leaf's centroid.
+            let points = quadrature_points(&nodes.corners[e]);
+            let mut g = 0.0;
+            for &l in &emitters {
+                let (f, _) = element_to_element(&nodes.corners[e], nodes.normal[e], &nodes.corners[l]);
+                if !(f > 0.0) {
+                    continue;
+                }
+                let y = leave_surface(nodes.centre[l], nodes.normal[l], offset);
+                let seen = points
+                    .iter()
+                    .filter(|&&x| {
+                        let xo = leave_surface(x, nodes.normal[e], offset);
+                        !accel.occluded(xo, y - xo, 1.0)
+                    })
+                    .count();
+                g += f * seen as f64 / 3.0 * mean(nodes.emission[l].as_dvec3());
+            }
+            reference += open * g;
+        }
+        let direct: f64 = landed.iter().map(|k| k[0]).sum();
+        let other: f64 = landed.iter().map(|k| k[1]).sum();
+        println!(
+            "object {name}: open area {area:.4} m², mean B {:.4}; direct power {direct:.4} W vs ray-traced {reference:.4} ({:+.1}%), indirect {other:.4} W",
+            power_b / area.max(1e-30),
+            100.0 * (direct / reference - 1.0)
+        );
+        for (kind, [d, o]) in KINDS.iter().zip(landed) {
+            println!("  {kind:>14}: direct {d:.4} W, indirect {o:.4} W");
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+/// Link types of the `--link-bias` report.
+const LINK_TYPES: [&str; 7] = [
+    "element pair (3-point)",
+    "element pair (48-point)",
+    "far cluster, member pairs",
+    "far cluster, Sillion",
+    "near, leaf pairs",
+    "near, sampled",
+    "self-link",
+];
+
+/// The `--link-bias` report.
+fn link_bias(
+    scene: &radray::scene::SceneDescription,
+    every: usize,
+    receiver_object: Option<&String>,
+    source_object: Option<&String>,
+) -> ExitCode {
+    use radray::radiosity::hierarchy::links::{leaves_below, member_pair_form_factor, EXACT_NEAR_PAIRS};
+    use radray::radiosity::hierarchy::visibility::{sampled_form_factor, VisibilityContext};
+    use rayon::prelude::*;
+    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let (nodes, links) = (structure.nodes(), structure.links());
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for s in &scene.surfaces {
+        let base = positions.len() as u32;
+        positions.extend_from_slice(&s.vertices);
+        for k in 1..s.vertices.len().saturating_sub(1) as u32 {
+            triangles.push([base, base + k, base + k + 1]);
+        }
+    }
+    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let ctx = VisibilityContext { accel: &accel, rays: 1024, offset: scene.diagonal() * 1e-5, seed: 0xb1a5 };
+    let inputs = structure.inputs();
+    // Whether node n has a leaf on object `name` (any, when no name is given).
+    let touches = |n: usize, name: Option<&String>| {
+        let Some(name) = name else { return true };
+        let mut stack = vec![n];
+        while let Some(m) = stack.pop() {
+            if nodes.is_leaf(m) && !nodes.is_cluster[m] {
+                if scene.surfaces[inputs.surface[nodes.input[m] as usize] as usize].object == *name {
+                    return true;
+                }
+            } else {
+                stack.extend(nodes.children(m));
+            }
+        }
+        false
+    };
+    let records: Vec<_> = links
+        .to_records()
+        .into_iter()
+        .filter(|l| touches(l.receiver as usize, receiver_object) && touches(l.source as usize, source_object))
+        .collect();
+    let picked: Vec<_> = records.iter().step_by(every.max(1)).collect();
+    let rows: Vec<(usize, f64, f64)> = picked
+        .par_iter()
+        .map(|l| {
+            let (r, s) = (l.receiver as usize, l.source as usize);
+            let kind = if r == s {
+                6
+            } else if !nodes.is_cluster[r] && !nodes.is_cluster[s] {
+                let c = |t: &[glam::Vec3; 3]| (t[0] + t[1] + t[2]) / 3.0;
+                let rad = |t: &[glam::Vec3; 3]| t.iter().map(|p| p.distance(c(t))).fold(0.0f32, f32::max);
+                let (a, b) = (&nodes.corners[r], &nodes.corners[s]);
+                if c(a).distance(c(b)) < 1.5 * (rad(a) + rad(b)) {
+                    1
+                } else {
+                    0
+                }
+            } else if !is_near(nodes, r, s) {
+                if member_pair_form_factor(nodes, r, s).is_some() {
+                    2
+                } else {
+                    3
+                }
+            } else {
+                let (mut rs, mut ss) = (Vec::new(), Vec::new());
+                let small = leaves_below(nodes, r, EXACT_NEAR_PAIRS, &mut rs)
+                    && leaves_below(nodes, s, EXACT_NEAR_PAIRS, &mut ss)
+                    && rs.len() * ss.len() <= EXACT_NEAR_PAIRS;
+                if small {
+                    4
+                } else {
+                    5
+                }
+            };
+            let (mut reference, _) = sampled_form_factor(&ctx, nodes, r, s);
+            let w = nodes.area[r] as f64 * nodes.exitance_mean[s];
+            if std::env::var("LINK_BIAS_LEAVES").is_ok() && nodes.exitance_mean[s] > 0.0 {
+                // The transfer with each source leaf's own exitance: Σ_c F_Rc B_c / B_S.
+                reference = leaf_weighted_form_factor(&ctx, nodes, r, s) / nodes.exitance_mean[s];
+            }
+            if kind == 5 && std::env::var("LINK_BIAS_DETAIL").is_ok() {
+                let again = VisibilityContext { rays: params.visibility_rays, seed: params.seed, ..ctx };
+                let redo = radray::radiosity::hierarchy::links::near_form_factor(nodes, &again, r, s);
+                println!(
+                    "near {r}{} <- {s}{}: areas {:.4} {:.4} radii {:.3} {:.3} d {:.3} F {:.5} again {:?} ref {:.5} power {:.5} -> {:.5}",
+                    if nodes.is_cluster[r] { "c" } else { "e" },
+                    if nodes.is_cluster[s] { "c" } else { "e" },
+                    nodes.area[r], nodes.area[s], nodes.radius[r], nodes.radius[s],
+                    nodes.centre[r].distance(nodes.centre[s]),
+                    l.form_factor, redo, reference, w * l.form_factor as f64, w * reference
+                );
+            }
+            (kind, w * l.form_factor as f64, w * reference)
+        })
+        .collect();
+    let mut sums = [[0.0f64; 3]; 7];
+    for (kind, f, reference) in rows {
+        sums[kind][0] += f;
+        sums[kind][1] += reference;
+        sums[kind][2] += 1.0;
+    }
+    println!(
+        "{} links, every {every}th: power A_R·B_S·F (W, × {every}) against a 1024-sample reference",
+        records.len()
+    );
+    for (name, [f, reference, n]) in LINK_TYPES.iter().zip(sums) {
+        println!(
+            "  {name:>26}: {n:>7} links, solve {:.4} W, reference {:.4} W ({:+.2}%)",
+            f * every as f64,
+            reference * every as f64,
+            100.0 * (f / reference - 1.0)
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+/// The `--sent` report.
+fn sent_by_object(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
+    use radray::radiosity::hierarchy::visibility::triangle_point;
+    use radray::transport::hit::leave_surface;
+    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
+    let mut objects: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
+    objects.sort();
+    objects.dedup();
+    let object_of = |surface: usize| objects.iter().position(|o| *o == scene.surfaces[surface].object).unwrap();
+    let k = objects.len();
+    // Open area per node and object, children after parents.
+    let mut area = vec![0.0f64; nodes.len() * k];
+    for n in (0..nodes.len()).rev() {
+        if nodes.is_leaf(n) && !nodes.is_cluster[n] {
+            let input = nodes.input[n] as usize;
+            if !inputs.back[input] {
+                area[n * k + object_of(inputs.surface[input] as usize)] = nodes.open_area[n] as f64;
+            }
+        } else {
+            for c in nodes.children(n) {
+                for o in 0..k {
+                    area[n * k + o] += area[c * k + o];
+                }
+            }
+        }
+    }
+    let me = objects.iter().position(|o| o == name).unwrap();
+    let mut by_links = vec![0.0f64; k];
+    for r in 0..links.offsets.len().saturating_sub(1) {
+        let receiver_open: f64 = (0..k).map(|o| area[r * k + o]).sum();
+        if !(receiver_open > 0.0) {
+            continue;
+        }
+        for l in links.range(r) {
+            let s = links.source[l] as usize;
+            let source_open: f64 = (0..k).map(|o| area[s * k + o]).sum();
+            if !(source_open > 0.0) || area[s * k + me] == 0.0 {
+                continue;
+            }
+            let power = nodes.area[r] as f64 * links.form_factor[l] as f64 * area[s * k + me] / source_open;
+            for o in 0..k {
+                by_links[o] += power * area[r * k + o] / receiver_open;
+            }
+        }
+    }
+    let (mut positions, mut triangles, mut tri_object) = (Vec::new(), Vec::new(), Vec::new());
+    for (i, s) in scene.surfaces.iter().enumerate() {
+        let base = positions.len() as u32;
+        positions.extend_from_slice(&s.vertices);
+        for j in 1..s.vertices.len().saturating_sub(1) as u32 {
+            triangles.push([base, base + j, base + j + 1]);
+            tri_object.push(object_of(i));
+        }
+    }
+    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let offset = scene.diagonal() * 1e-5;
+    let mut by_rays = vec![0.0f64; k];
+    let mut rng = 0x12345678u64;
+    let mut uniform = || {
+        rng = radray::rng::splitmix64(rng);
+        (rng >> 11) as f32 / (1u64 << 53) as f32
+    };
+    let mut total = 0.0;
+    for n in 0..nodes.len() {
+        if !nodes.is_leaf(n) || nodes.is_cluster[n] || area[n * k + me] == 0.0 {
+            continue;
+        }
+        let a = area[n * k + me];
+        total += a;
+        const RAYS: usize = 64;
+        for _ in 0..RAYS {
+            let p = triangle_point(&nodes.corners[n], uniform(), uniform());
+            let (u1, u2) = (uniform(), uniform());
+            let (t, b) = nodes.normal[n].any_orthonormal_pair();
+            let r = u1.sqrt();
+            let phi = std::f32::consts::TAU * u2;
+            let d = t * (r * phi.cos()) + b * (r * phi.sin()) + nodes.normal[n] * (1.0 - u1).max(0.0).sqrt();
+            let o = leave_surface(p, nodes.normal[n], offset);
+            if let Some(hit) = accel.closest_hit(o, d, 0.0, f32::INFINITY) {
+                by_rays[tri_object[hit.triangle as usize]] += a / RAYS as f64;
+            }
+        }
+    }
+    println!("object {name}: open area {total:.4}; the share of its power landing on each object, links / rays");
+    for o in 0..k {
+        println!("  {:>12}: links {:.4}  rays {:.4}", objects[o], by_links[o] / total, by_rays[o] / total);
+    }
+    println!(
+        "  {:>12}: links {:.4}  rays {:.4}",
+        "all",
+        by_links.iter().sum::<f64>() / total,
+        by_rays.iter().sum::<f64>() / total
+    );
+    ExitCode::SUCCESS
+}
+
+/// The `--gathered` report.
+fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String]) -> ExitCode {
+    use radray::radiosity::hierarchy::visibility::triangle_point;
+    use radray::transport::hit::leave_surface;
+    use rayon::prelude::*;
+    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
+    let scales = ArrivalScales::new(nodes, links);
+    let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
+    let front: Vec<usize> = leaves.iter().copied().filter(|&n| !inputs.back[nodes.input[n] as usize]).collect();
+    let positions: Vec<glam::Vec3> = front.iter().flat_map(|&n| nodes.corners[n]).collect();
+    let triangles: Vec<[u32; 3]> = (0..front.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let offset = scene.diagonal() * 1e-5;
+    let mean = |v: DVec3| (v.x + v.y + v.z) / 3.0;
+    for name in objects {
+        let mine: Vec<usize> = front
+            .iter()
+            .copied()
+            .filter(|&e| {
+                scene.surfaces[inputs.surface[nodes.input[e] as usize] as usize].object == *name
+                    && nodes.open_area[e] > 0.0
+            })
+            .collect();
+        let rows: Vec<(usize, f64, [f64; 5], f64)> = mine
+            .par_iter()
+            .map(|&e| {
+                let member = inputs.node[nodes.input[e] as usize] as usize;
+                let mut by_kind = [0.0f64; 5];
+                let mut up = e as u32;
+                while up != u32::MAX {
+                    let a = up as usize;
+                    for k in links.range(a) {
+                        let s = links.source[k] as usize;
+                        let t = mean(nodes.exitance[s] - nodes.emission[s].as_dvec3()) * links.form_factor[k] as f64;
+                        let (gain, kind) = if !nodes.is_cluster[a] {
+                            (nodes.open_gain(a), 0)
+                        } else if scales.has_shares(k) {
+                            (scales.shares(k).find(|&(m, _)| m == member).map_or(0.0, |(_, c)| c as f64), 1)
+                        } else {
+                            match arrival_direction(nodes, a, s) {
+                                Some(w) if scales.scale[k] > 0.0 => (
+                                    scales.scale[k] as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
+                                    if is_near(nodes, a, s) { 3 } else { 2 },
+                                ),
+                                _ => (nodes.open_gain(a), 4),
+                            }
+                        };
+                        by_kind[kind] += t * gain;
+                    }
+                    up = nodes.parent[a];
+                }
+                let mut state = radray::rng::splitmix64(e as u64 ^ 0xfeed);
+                let mut uniform = || {
+                    state = radray::rng::splitmix64(state);
+                    (state >> 40) as f32 / (1u64 << 24) as f32
+                };
+                const RAYS: usize = 256;
+                let n = nodes.normal[e];
+                let (t, b) = n.any_orthonormal_pair();
+                let mut g = 0.0;
+                for _ in 0..RAYS {
+                    let p = triangle_point(&nodes.corners[e], uniform(), uniform());
+                    let (u1, u2) = (uniform(), uniform());
+                    let r = u1.sqrt();
+                    let phi = std::f32::consts::TAU * u2;
+                    let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+                    if let Some(hit) = accel.closest_hit(leave_surface(p, n, offset), d, 0.0, f32::INFINITY) {
+                        let l = front[hit.triangle as usize];
+                        // Only the front of a hit leaf sends.
+                        if nodes.normal[l].dot(d) < 0.0 {
+                            g += mean(nodes.exitance[l] - nodes.emission[l].as_dvec3());
+                        }
+                    }
+                }
+                if std::env::var("GATHERED_DETAIL").is_ok() {
+                    println!(
+                        "leaf {e} n {:.2} {:.2} {:.2} links {:.4} {:.4} {:.4} {:.4} {:.4} rays {:.4}",
+                        n.x,
+                        n.y,
+                        n.z,
+                        by_kind[0],
+                        by_kind[1],
+                        by_kind[2],
+                        by_kind[3],
+                        by_kind[4],
+                        g / RAYS as f64
+                    );
+                }
+                let y = n.y;
+                let bin = if y < -0.3 {
+                    0
+                } else if y > 0.3 {
+                    2
+                } else {
+                    1
+                };
+                (bin, nodes.open_area[e] as f64, by_kind, g / RAYS as f64)
+            })
+            .collect();
+        println!(
+            "object {name}: Σ A·G (W) from the links (element, shares, far arrival, near arrival, uniform) vs rays"
+        );
+        for (bin, label) in ["facing down", "sideways", "facing up"].iter().enumerate() {
+            let (mut a, mut kinds, mut rays) = (0.0, [0.0f64; 5], 0.0);
+            for (b, area, k, g) in &rows {
+                if *b == bin {
+                    a += area;
+                    for i in 0..5 {
+                        kinds[i] += area * k[i];
+                    }
+                    rays += area * g;
+                }
+            }
+            let links_total: f64 = kinds.iter().sum();
+            println!(
+                "  {label:>11} (area {a:.3}): links {links_total:.4} = {:.4} + {:.4} + {:.4} + {:.4} + {:.4}; rays {rays:.4} ({:+.1}%)",
+                kinds[0],
+                kinds[1],
+                kinds[2],
+                kinds[3],
+                kinds[4],
+                100.0 * (links_total / rays - 1.0)
+            );
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+/// The `--coverage` report.
+fn coverage(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
+    use rayon::prelude::*;
+    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
+    let mut set = rustc_hash::FxHashSet::default();
+    for r in 0..links.offsets.len().saturating_sub(1) {
+        for k in links.range(r) {
+            set.insert((r as u32, links.source[k]));
+        }
+    }
+    let ancestors = |n: usize| {
+        let mut out = Vec::new();
+        let mut up = n as u32;
+        while up != u32::MAX {
+            out.push(up);
+            up = nodes.parent[up as usize];
+        }
+        out
+    };
+    let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
+    let object = |n: usize| &scene.surfaces[inputs.surface[nodes.input[n] as usize] as usize].object;
+    let mine: Vec<usize> = leaves.iter().copied().filter(|&n| object(n) == name && nodes.open_area[n] > 0.0).collect();
+    let sources: Vec<usize> = leaves.iter().copied().step_by(16).filter(|&n| nodes.open_area[n] > 0.0).collect();
+    let source_up: Vec<Vec<u32>> = sources.iter().map(|&s| ancestors(s)).collect();
+    let mean = |v: DVec3| (v.x + v.y + v.z) / 3.0;
+    // (power of pairs with no link, with one, with more; pair counts).
+    let mut objects: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
+    objects.sort();
+    objects.dedup();
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for s in &scene.surfaces {
+        let base = positions.len() as u32;
+        positions.extend_from_slice(&s.vertices);
+        for k in 1..s.vertices.len().saturating_sub(1) as u32 {
+            triangles.push([base, base + k, base + k + 1]);
+        }
+    }
+    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let offset = scene.diagonal() * 1e-5;
+    use radray::radiosity::hierarchy::form_factor::quadrature_points;
+    use radray::transport::hit::leave_surface;
+    let rows: Vec<Vec<f64>> = mine
+        .par_iter()
+        .map(|&r| {
+            let up = ancestors(r);
+            let mut out = vec![0.0f64; 6 + objects.len()];
+            for (i, &s) in sources.iter().enumerate() {
+                if s == r {
+                    continue;
+                }
+                let count =
+                    up.iter().map(|&a| source_up[i].iter().filter(|&&b| set.contains(&(a, b))).count()).sum::<usize>();
+                let (f, _) = element_to_element(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
+                if !(f > 0.0) {
+                    continue;
+                }
+                let power = nodes.open_area[r] as f64 * f * mean(nodes.exitance[s]) * 16.0;
+                let slot = count.min(2);
+                out[slot] += power;
+                out[3 + slot] += 1.0;
+                if count == 0 {
+                    // Visible share of the missing pair: rays from the receiver's quadrature points
+                    // to the source's centroid.
+                    let y = leave_surface(nodes.centre[s], nodes.normal[s], offset);
+                    let seen = quadrature_points(&nodes.corners[r])
+                        .iter()
+                        .filter(|&&x| {
+                            let xo = leave_surface(x, nodes.normal[r], offset);
+                            !accel.occluded(xo, y - xo, 1.0)
+                        })
+                        .count();
+                    let o = objects.iter().position(|n| n == object(s)).unwrap();
+                    out[6 + o] += power * seen as f64 / 3.0;
+                }
+            }
+            out
+        })
+        .collect();
+    let mut total = vec![0.0f64; 6 + objects.len()];
+    for row in rows {
+        for i in 0..total.len() {
+            total[i] += row[i];
+        }
+    }
+    for (o, n) in objects.iter().enumerate() {
+        println!("  missing pairs from {n}: visible power {:.4} W", total[6 + o]);
+    }
+    println!(
+        "object {name}: unoccluded pair power with no link {:.4} W ({} pairs), one {:.4} W ({}), two or more {:.4} W ({})",
+        total[0], total[3], total[1], total[4], total[2], total[5]
+    );
+    ExitCode::SUCCESS
+}
+
+/// Σ_c F_Rc·B_c over the leaves c below `source` (B the mean channel), by Monte Carlo over receiver
+/// points x (uniform by area) and source leaves c (picked by area, every descent by area, element
+/// pieces included): F(x → c)·(A_S/A_c)·V(x, y_c)·B_c, Lambert's exact point-to-polygon in the leaf.
+fn leaf_weighted_form_factor(
+    ctx: &radray::radiosity::hierarchy::visibility::VisibilityContext,
+    nodes: &radray::radiosity::hierarchy::nodes::Nodes,
+    receiver: usize,
+    source: usize,
+) -> f64 {
+    use radray::radiosity::hierarchy::form_factor::point_to_polygon;
+    use radray::radiosity::hierarchy::visibility::{sample_point, triangle_point};
+    use radray::transport::hit::leave_surface;
+    let mut state = radray::rng::splitmix64((receiver as u64) << 32 ^ source as u64);
+    let mut uniform = || {
+        state = radray::rng::splitmix64(state);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let n = ctx.rays as usize;
+    let mut sum = 0.0;
+    for _ in 0..n {
+        let (x, nx) = sample_point(nodes, receiver, [uniform(), uniform()]);
+        // Descend to a leaf by area.
+        let mut at = source;
+        while !nodes.is_leaf(at) {
+            let total: f64 = nodes.children(at).map(|c| nodes.area[c] as f64).sum();
+            let mut pick = uniform() * total;
+            let mut chosen = nodes.children(at).last().unwrap();
+            for c in nodes.children(at) {
+                if pick < nodes.area[c] as f64 {
+                    chosen = c;
+                    break;
+                }
+                pick -= nodes.area[c] as f64;
+            }
+            at = chosen;
+        }
+        let corners = &nodes.corners[at];
+        let f = point_to_polygon(x, nx, corners) * nodes.area[source] as f64 / nodes.area[at] as f64;
+        if !(f > 0.0) {
+            continue;
+        }
+        // Visibility to a point on the leaf that faces x (a few tries), else counted visible.
+        let mut v = 1.0;
+        for _ in 0..8 {
+            let y = triangle_point(corners, uniform() as f32, uniform() as f32);
+            let d = y - x;
+            if nodes.normal[at].dot(d) < 0.0 && nx.dot(d) > 0.0 {
+                let xo = leave_surface(x, nx, ctx.offset);
+                let yo = leave_surface(y, nodes.normal[at], ctx.offset);
+                v = if ctx.accel.occluded(xo, yo - xo, 1.0) { 0.0 } else { 1.0 };
+                break;
+            }
+        }
+        sum += f * v * nodes.exitance_mean[at];
+    }
+    sum / n as f64
 }

@@ -974,3 +974,89 @@ proptest! {
         prop_assert!(exact > 0, "{exact} of {boundary} boundary vertices within every limit");
     }
 }
+
+/// A sphere of `rings` × `segments` triangles (radius `radius`, centre `centre`), counter-clockwise
+/// seen from outside, caps as fans.
+fn sphere_triangles(centre: Vec3, radius: f32, rings: u32, segments: u32) -> Vec<Vec<Vec3>> {
+    let point = |ring: u32, segment: u32| {
+        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+        let phi = std::f32::consts::TAU * segment as f32 / segments as f32;
+        centre + radius * Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+    };
+    let mut out = Vec::new();
+    for ring in 0..rings {
+        for segment in 0..segments {
+            let (a, b) = (point(ring, segment), point(ring, segment + 1));
+            let (c, d) = (point(ring + 1, segment), point(ring + 1, segment + 1));
+            if ring + 1 < rings {
+                out.push(vec![b, d, c]);
+            }
+            if ring > 0 {
+                out.push(vec![a, b, c]);
+            }
+        }
+    }
+    out
+}
+
+/// A near link to a cluster receiver reaches each member by the member's own form factor to the
+/// source (`gather::ArrivalScales`, `sampled_member_shares`): a sphere of 8 × 16 facets (radius 1)
+/// under a triangular lamp 1.5 above its centre, close enough that the two bounding spheres
+/// overlap (a near link). With the link's form factor the exact centroid rule Σ_i A_i F(x_i → S) /
+/// A_R, every facet gets G_i = F(x_i → S)·B_S, Lambert's exact point-to-polygon form factor from its
+/// centroid: the source is one element, so the sampled source elements are exact. Tolerance 1e-5 of
+/// the largest G: the shares are f32. Facets whose plane hides the lamp get exactly 0. (The arrival
+/// this replaced, max(0, n_i·ω) with ω between the centres, is off by up to 58% of the largest G
+/// here: it spreads the light by a direction, not by each facet's distance to a lamp that fills
+/// much of its sky.) Ignored on main: the fix (branch `hcurve`, effa960) doubles the hierarchy's
+/// cost on tessellated scenes; see docs/accuracy.md, session 14.
+#[test]
+#[ignore = "near-link member shares not landed: off by up to 58% with the centre-direction spread (docs/accuracy.md, session 14)"]
+fn a_near_link_reaches_each_member_by_its_exact_form_factor() {
+    let sphere = sphere_triangles(Vec3::ZERO, 1.0, 8, 16);
+    let scene = scene_of(sphere.into_iter().map(|t| (t, 0.5, 0.0)).collect());
+    let (mut nodes, root, inputs, _) = clusters::build(&scene).unwrap();
+    let root = root as usize;
+    let lamp = [Vec3::new(-1.2, 1.5, -1.0), Vec3::new(1.4, 1.5, -0.6), Vec3::new(0.0, 1.5, 1.4)];
+    let source = nodes.push_element(lamp, u32::MAX - 1, 0, Vec3::ZERO, Vec3::ONE) as usize;
+    assert!(hierarchy::links::is_near(&nodes, root, source), "the test needs a near link");
+    let members: Vec<usize> = inputs.node.iter().map(|&n| n as usize).collect();
+    let exact: Vec<f64> =
+        members.iter().map(|&m| point_to_polygon(nodes.centre[m], nodes.normal[m], &nodes.corners[source])).collect();
+    let form_factor =
+        members.iter().zip(&exact).map(|(&m, f)| nodes.area[m] as f64 * f).sum::<f64>() / nodes.area[root] as f64;
+    let links = hierarchy::links::Links::from_records(
+        nodes.len(),
+        vec![hierarchy::links::LinkRecord {
+            receiver: root as u32,
+            source: source as u32,
+            form_factor: form_factor as f32,
+            spread: 0.0,
+        }],
+    );
+    let scales = gather::ArrivalScales::new(&nodes, &links);
+    assert!(scales.has_shares(0));
+    let own: Vec<gather::Irradiance> =
+        (0..nodes.len()).map(|n| gather::gather(&nodes, &links, &scales, n, &nodes.exitance)).collect();
+    let mut exitance = nodes.exitance.clone();
+    let total = gather::push_pull(&nodes, root, &own, &mut exitance);
+    let largest = exact.iter().copied().fold(0.0, f64::max);
+    let mut hidden = 0;
+    for (&m, &f) in members.iter().zip(&exact) {
+        assert!((total[m].x - f).abs() <= 1e-5 * largest, "member {m}: G {} vs exact {f}", total[m].x);
+        if f == 0.0 {
+            assert_eq!(total[m], DVec3::ZERO);
+            hidden += 1;
+        }
+    }
+    assert!(hidden > 0 && hidden < members.len(), "{hidden} hidden facets of {}", members.len());
+    // What the centre-to-centre arrival would give instead, for the figure in the doc comment.
+    let towards = gather::arrival_direction(&nodes, root, source).unwrap();
+    let scale = nodes.area[root] as f64 / nodes.open_projected_area(root, towards);
+    let worst = members
+        .iter()
+        .zip(&exact)
+        .map(|(&m, f)| (form_factor * scale * nodes.normal[m].dot(towards).max(0.0) as f64 - f).abs() / largest)
+        .fold(0.0, f64::max);
+    assert!(worst > 0.3, "the arrival's worst error {worst} no longer shows what this test guards against");
+}
