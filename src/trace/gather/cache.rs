@@ -1,7 +1,8 @@
 //! The irradiance cache (Ward, Rubinstein and Clear 1988; Ward and Heckbert 1992): gathered records
 //! with their gradients, the error-bounded weights that decide which records may serve a point, and
-//! the interpolation between them. Filled once before the image (`prepass`), read-only after, so that
-//! every lookup sums the same records in the same order whatever the thread count.
+//! the interpolation between them, with the radii clamped to their neighbours' (Křivánek et al. 2006)
+//! so that no record reaches across a contact. Filled once before the image (`prepass`), read-only
+//! after, so that every lookup sums the same records in the same order whatever the thread count.
 
 use std::collections::HashMap;
 
