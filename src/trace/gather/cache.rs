@@ -1,7 +1,8 @@
 //! The irradiance cache (Ward, Rubinstein and Clear 1988; Ward and Heckbert 1992): gathered records
 //! with their gradients, the error-bounded weights that decide which records may serve a point, and
-//! the interpolation between them. Filled once before the image (`prepass`), read-only after, so that
-//! every lookup sums the same records in the same order whatever the thread count.
+//! the interpolation between them, with the radii clamped to their neighbours' (Křivánek et al. 2006)
+//! so that no record reaches across a contact. Filled once before the image (`prepass`), read-only
+//! after, so that every lookup sums the same records in the same order whatever the thread count.
 
 use std::collections::HashMap;
 
@@ -63,6 +64,8 @@ pub struct IrradianceCache {
     /// finest level on which it spans at most MAX_CELLS_PER_AXIS cells per axis.
     grid: HashMap<(u32, IVec3), Vec<u32>>,
     levels: u32,
+    /// Each record's smallest radius (`insert`'s `min_radius`), which neighbour clamping keeps.
+    min_radius: Vec<f32>,
 }
 
 /// A record spans at most this many cells per axis on its grid level.
@@ -77,7 +80,15 @@ impl IrradianceCache {
     /// An empty cache of accuracy a ∈ (0, 1].
     pub fn new(accuracy: f32) -> IrradianceCache {
         assert!(accuracy > 0.0 && accuracy <= 1.0, "the accuracy is validated by the scene parser");
-        IrradianceCache { accuracy, records: Vec::new(), indexed: 0, cell_size: 1.0, grid: HashMap::new(), levels: 0 }
+        IrradianceCache {
+            accuracy,
+            records: Vec::new(),
+            indexed: 0,
+            cell_size: 1.0,
+            grid: HashMap::new(),
+            levels: 0,
+            min_radius: Vec::new(),
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -127,11 +138,62 @@ impl IrradianceCache {
             }
         }
         self.records.push(IrradianceRecord { position, normal, estimate, radius });
+        self.min_radius.push(min_radius.max(f32::MIN_POSITIVE));
     }
 
-    /// Rebuilds the grids over all records, level 0's cell twice the smallest reach a·R_i.
-    /// Deterministic: records enter every list in insertion order.
+    /// Clamps the radii to their neighbours' (`clamp_to_neighbours`), then rebuilds the grids over all
+    /// records, level 0's cell twice the smallest reach a·R_i. Deterministic: records enter every list
+    /// in insertion order, and the clamp reads the radii as they were before it.
     pub fn index(&mut self) {
+        self.build_grids();
+        if self.clamp_to_neighbours() {
+            self.build_grids();
+        }
+        self.indexed = self.records.len();
+    }
+
+    /// Neighbour clamping (Křivánek, Bouatouch, Pattanaik and Žára 2006, "Making radiance and
+    /// irradiance caching practical: adaptive caching and neighbor clamping"):
+    ///
+    /// R_i ← max(min(R_i, min_j (R_j + |p_i − p_j|)), R_i,min)
+    ///
+    /// over the records j whose point lies within record i's reach (|p_i − p_j| < a·R_i), R_i,min the
+    /// radius `insert` clamped to from below. R_i is the harmonic mean distance to the surfaces record
+    /// i's gather saw, a stand-in for the distance to the nearest geometry, and that distance is
+    /// 1-Lipschitz in the point: a record that saw no surface nearer than R_i cannot be right if a
+    /// neighbour d away saw one at R_j < R_i − d. Such records come from gathers a little away from a
+    /// contact (the floor beside a torus lying on it, the torus's underside, a crease's other side):
+    /// their hemisphere holds the contact only as a few cells, so their R and their gradients say
+    /// little about it, yet their reach a·R_i spans it, and the prepass (`prepass::fill`) then finds
+    /// the points at the contact covered and never gathers there. Clamped, they stop short of it and
+    /// the next level's points there gather their own records. Returns whether a radius changed.
+    fn clamp_to_neighbours(&mut self) -> bool {
+        let mut clamped: Vec<f32> = self.records.iter().map(|r| r.radius).collect();
+        for (j, neighbour) in self.records.iter().enumerate() {
+            for level in 0..self.levels {
+                let Some(list) = self.grid.get(&(level, self.cell(level, neighbour.position))) else {
+                    continue;
+                };
+                for &i in list.iter().filter(|&&i| i as usize != j) {
+                    let record = &self.records[i as usize];
+                    let distance = (record.position - neighbour.position).length();
+                    if distance < self.accuracy * record.radius {
+                        let limit = (neighbour.radius + distance).max(self.min_radius[i as usize]);
+                        clamped[i as usize] = clamped[i as usize].min(limit);
+                    }
+                }
+            }
+        }
+        let mut changed = false;
+        for (record, radius) in self.records.iter_mut().zip(clamped) {
+            changed |= radius < record.radius;
+            record.radius = radius;
+        }
+        changed
+    }
+
+    /// The nested grids over all records' spheres of validity (radius a·R_i).
+    fn build_grids(&mut self) {
         let Some(smallest) = self.records.iter().map(|r| self.accuracy * r.radius).min_by(f32::total_cmp) else {
             return;
         };
@@ -157,7 +219,6 @@ impl IrradianceCache {
                 }
             }
         }
-        self.indexed = self.records.len();
     }
 
     fn cell(&self, level: u32, p: Vec3) -> IVec3 {
@@ -250,5 +311,27 @@ mod tests {
         cache.index();
         assert!(cache.lookup(Vec3::ZERO, Vec3::Z).is_none());
         assert!(cache.lookup(Vec3::new(0.0, 0.0, 0.2), Vec3::Z).is_some());
+    }
+
+    #[test]
+    fn neighbour_clamping_keeps_a_record_from_reaching_past_a_nearby_small_one() {
+        // Record 0 saw surfaces 2 away on average (reach 1 at a = 0.5); record 1, 0.4 from it, saw one
+        // 0.1 away. R_0 becomes 0.1 + 0.4 = 0.5 (reach 0.25): the point 0.38 from record 0 towards
+        // record 1 (within record 1's reach 0.05) is no longer record 0's to serve, and record 1's
+        // radius stays as it was.
+        let mut cache = IrradianceCache::new(0.5);
+        cache.insert(Vec3::ZERO, Vec3::Z, flat(1.0, 2.0), 0.01, 10.0);
+        cache.insert(Vec3::new(0.4, 0.0, 0.0), Vec3::Z, flat(3.0, 0.1), 0.01, 10.0);
+        cache.index();
+        assert!((cache.records()[0].radius - 0.5).abs() < 1e-6, "R_0 = {}", cache.records()[0].radius);
+        assert_eq!(cache.records()[1].radius, 0.1);
+        let p = Vec3::new(0.38, 0.0, 0.0);
+        assert_eq!(cache.lookup(p, Vec3::Z), Some(Vec3::splat(3.0)));
+        // The clamp keeps the radius `insert` was given as its smallest.
+        let mut cache = IrradianceCache::new(0.5);
+        cache.insert(Vec3::ZERO, Vec3::Z, flat(1.0, 2.0), 0.8, 10.0);
+        cache.insert(Vec3::new(0.4, 0.0, 0.0), Vec3::Z, flat(3.0, 0.1), 0.01, 10.0);
+        cache.index();
+        assert_eq!(cache.records()[0].radius, 0.8);
     }
 }
