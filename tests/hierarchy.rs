@@ -1008,10 +1008,8 @@ fn sphere_triangles(centre: Vec3, radius: f32, rings: u32, segments: u32) -> Vec
 /// the largest G: the shares are f32. Facets whose plane hides the lamp get exactly 0. (The arrival
 /// this replaced, max(0, n_i·ω) with ω between the centres, is off by up to 58% of the largest G
 /// here: it spreads the light by a direction, not by each facet's distance to a lamp that fills
-/// much of its sky.) Ignored on main: the fix (branch `hcurve`, effa960) doubles the hierarchy's
-/// cost on tessellated scenes; see docs/accuracy.md, session 14.
+/// much of its sky.)
 #[test]
-#[ignore = "near-link member shares not landed: off by up to 58% with the centre-direction spread (docs/accuracy.md, session 14)"]
 fn a_near_link_reaches_each_member_by_its_exact_form_factor() {
     let sphere = sphere_triangles(Vec3::ZERO, 1.0, 8, 16);
     let scene = scene_of(sphere.into_iter().map(|t| (t, 0.5, 0.0)).collect());

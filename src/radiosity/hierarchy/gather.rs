@@ -9,8 +9,9 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::form_factor::point_to_polygon;
-use super::links::Links;
+use super::links::{is_near, Links};
 use super::nodes::Nodes;
+use super::visibility::sample_element;
 
 /// Light a cluster receives over one link, from one direction: a member of unit normal n takes the
 /// irradiance `irradiance`·max(0, n·ω), ω = `towards`.
@@ -73,6 +74,13 @@ impl Irradiance {
 ///   near link, a far one at a grazing angle). (The 3-point rule per member cost 2.5× the CPU-s of
 ///   the scales on procedural:16000 for no measurable gain on cornell_original; 64 pairs instead of
 ///   16 cost +5 CPU-s there, session 13);
+/// - near links (`links::is_near`) to a receiver of at most `NEAR_SHARE_MEMBERS` members with more
+///   pairs: member shares too, c_i = A_R·F̂_i / Σ_j A_open,j·F̂_j with F̂_i member i's form factor to
+///   `NEAR_SHARE_SAMPLES` source elements sampled by area (`sampled_member_shares`). The ends of a near
+///   link overlap, so ω between their centres may point anywhere: on the rotunda a cluster of the
+///   torus and the column took a plinth cluster's light on the torus's underside (G 0.38 where the
+///   exact transfer is 0.002), the torus's downward facets gathered 1.94× and the plinth's facets up to
+///   1.37× what rays give (`examples/hierarchy_links --gathered`), session 14;
 /// - neither (s_l = 0): the transfer is uniform over the receiver: receivers that are elements, a
 ///   cluster's self-link, and links whose direction no open member faces.
 ///
@@ -165,7 +173,7 @@ fn receiver_reach(nodes: &Nodes, links: &Links, r: usize) -> Vec<Reach> {
         }
     }
     let area = nodes.area[r] as f64;
-    let mut sources = Vec::new();
+    let (mut sources, mut picks) = (Vec::new(), Vec::new());
     links
         .range(r)
         .zip(directions.iter().zip(sums))
@@ -177,6 +185,12 @@ fn receiver_reach(nodes: &Nodes, links: &Links, r: usize) -> Vec<Reach> {
             if members.len() <= SHARE_PAIRS && nodes.member_count_within(s, SHARE_PAIRS / members.len().max(1)) {
                 nodes.members(s, &mut sources);
                 if let Some(shares) = member_shares(nodes, &members, &sources, area) {
+                    return Reach::Shares(shares);
+                }
+            }
+            if members.len() <= NEAR_SHARE_MEMBERS && is_near(nodes, r, s) {
+                sampled_source_elements(nodes, s, &mut picks);
+                if let Some(shares) = sampled_member_shares(nodes, &members, &picks, area) {
                     return Reach::Shares(shares);
                 }
             }
@@ -192,6 +206,72 @@ fn receiver_reach(nodes: &Nodes, links: &Links, r: usize) -> Vec<Reach> {
 /// Links of a cluster receiver whose ends hold at most this many (member, source member) pairs are
 /// spread by member shares (`ArrivalScales`).
 pub const SHARE_PAIRS: usize = 16;
+
+/// Near links (`links::is_near`) of a cluster receiver with at most this many members are spread by
+/// member shares from `NEAR_SHARE_SAMPLES` sampled source elements (`sampled_member_shares`).
+pub const NEAR_SHARE_MEMBERS: usize = 256;
+
+/// Source elements a near link's member shares are estimated with (`sampled_source_elements`). Four,
+/// measured in one window (session 14, docs/accuracy.md): the rotunda 0.00361 at 4, 0.00361 at 8 and
+/// 16; procedural:16000 24.4 / 33.4 / 42.2 CPU-s (19.95 without member shares for near links).
+pub const NEAR_SHARE_SAMPLES: usize = 4;
+
+/// `NEAR_SHARE_SAMPLES` elements below `source` (down to input triangles), each picked with
+/// probability proportional to its area at the fixed stratified points u_k = (k + ½)/K, v = ½
+/// (`visibility::sample_element`), with its weight A_S/(K·A_t): Σ_k w_k·f(t_k) estimates
+/// Σ_t f(t) over the source's elements without bias for any f, exactly when there are K or fewer
+/// elements of equal area. Deterministic (no random numbers), so the shares do not depend on seeds
+/// or threads. Writes (element, weight) pairs into `out`.
+pub fn sampled_source_elements(nodes: &Nodes, source: usize, out: &mut Vec<(usize, f64)>) {
+    out.clear();
+    let k = NEAR_SHARE_SAMPLES;
+    let area = nodes.area[source] as f64;
+    for i in 0..k {
+        let (t, _) = sample_element(nodes, source, [(i as f64 + 0.5) / k as f64, 0.5]);
+        let a = nodes.area[t] as f64;
+        if a > 0.0 {
+            out.push((t, area / (k as f64 * a)));
+        }
+    }
+}
+
+/// Member shares of a near link (`links::is_near`: overlapping bounding spheres, where ω between
+/// the centres says little about which members face the source; on the rotunda a torus-and-column
+/// cluster's link from a plinth cluster lit the torus's underside, whose members face the floor):
+///
+/// c_i = A_R·F̂_i / Σ_j A_open,j·F̂_j,  F̂_i = Σ_k w_k·F(x_i → t_k),
+///
+/// F(x → t) Lambert's exact `point_to_polygon` from member i's centroid x_i (normal n_i) to the
+/// sampled source element t_k with weight w_k (`sampled_source_elements`): F̂_i estimates member
+/// i's unoccluded form factor to the source, so each member takes the link's power by its own
+/// position and orientation (a member facing away from every sampled element gets nothing), and the
+/// link's power A_R·F_RS·B_S is kept exactly. Pairs within one input triangle are skipped. `None`
+/// when no open member sees a sampled element (the caller falls back to the arrival).
+fn sampled_member_shares(
+    nodes: &Nodes,
+    members: &[usize],
+    picks: &[(usize, f64)],
+    receiver_area: f64,
+) -> Option<Vec<(u32, f32)>> {
+    let mut form_factors = Vec::with_capacity(members.len());
+    let mut total = 0.0f64;
+    for &m in members {
+        let open = nodes.open_area[m] as f64;
+        if !(open > 0.0) {
+            continue;
+        }
+        let f: f64 = picks
+            .iter()
+            .filter(|&&(t, _)| nodes.input[t] != nodes.input[m])
+            .map(|&(t, w)| w * point_to_polygon(nodes.centre[m], nodes.normal[m], &nodes.corners[t]))
+            .sum();
+        if f > 0.0 {
+            form_factors.push((m as u32, f));
+            total += open * f;
+        }
+    }
+    (total > 0.0).then(|| form_factors.into_iter().map(|(m, f)| (m, (receiver_area * f / total) as f32)).collect())
+}
 
 /// (member, c_i = A_R·F_i / Σ_j A_open,j·F_j) for the open members with F_i > 0, F_i = Σ_σ F(x_i →
 /// σ) from the member's centroid over the source's members `leaves` (`Nodes::members`: its own
