@@ -253,6 +253,24 @@ fn sampled_member_shares(
     picks: &[(usize, f64)],
     receiver_area: f64,
 ) -> Option<Vec<(u32, f32)>> {
+    shares_by_form_factor(nodes, members, receiver_area, |m| {
+        picks
+            .iter()
+            .filter(|&&(t, _)| nodes.input[t] != nodes.input[m])
+            .map(|&(t, w)| w * point_to_polygon(nodes.centre[m], nodes.normal[m], &nodes.corners[t]))
+            .sum()
+    })
+}
+
+/// c_i = A_R·F_i / Σ_j A_open,j·F_j over the open members (`open_area` > 0) with F_i =
+/// `form_factor(i)` > 0, as (member, c_i); `None` when every F_i is 0. Σ_i A_open,i·c_i = A_R: the
+/// shares keep the link's power.
+fn shares_by_form_factor(
+    nodes: &Nodes,
+    members: &[usize],
+    receiver_area: f64,
+    form_factor: impl Fn(usize) -> f64,
+) -> Option<Vec<(u32, f32)>> {
     let mut form_factors = Vec::with_capacity(members.len());
     let mut total = 0.0f64;
     for &m in members {
@@ -260,11 +278,7 @@ fn sampled_member_shares(
         if !(open > 0.0) {
             continue;
         }
-        let f: f64 = picks
-            .iter()
-            .filter(|&&(t, _)| nodes.input[t] != nodes.input[m])
-            .map(|&(t, w)| w * point_to_polygon(nodes.centre[m], nodes.normal[m], &nodes.corners[t]))
-            .sum();
+        let f = form_factor(m);
         if f > 0.0 {
             form_factors.push((m as u32, f));
             total += open * f;
@@ -278,24 +292,13 @@ fn sampled_member_shares(
 /// triangle for an element, exact in the source; pairs within one input triangle skipped); `None`
 /// when no open member sees the source.
 fn member_shares(nodes: &Nodes, members: &[usize], leaves: &[usize], receiver_area: f64) -> Option<Vec<(u32, f32)>> {
-    let mut form_factors = Vec::with_capacity(members.len());
-    let mut total = 0.0f64;
-    for &m in members {
-        let open = nodes.open_area[m] as f64;
-        if !(open > 0.0) {
-            continue;
-        }
-        let f: f64 = leaves
+    shares_by_form_factor(nodes, members, receiver_area, |m| {
+        leaves
             .iter()
             .filter(|&&l| nodes.input[l] != nodes.input[m])
             .map(|&l| point_to_polygon(nodes.centre[m], nodes.normal[m], &nodes.corners[l]))
-            .sum();
-        if f > 0.0 {
-            form_factors.push((m as u32, f));
-            total += open * f;
-        }
-    }
-    (total > 0.0).then(|| form_factors.into_iter().map(|(m, f)| (m, (receiver_area * f / total) as f32)).collect())
+            .sum()
+    })
 }
 
 /// ω of link (receiver ← source) when the receiver is a cluster and the link has a direction: the
