@@ -148,14 +148,15 @@ fn main() -> ExitCode {
         let mut up = node;
         while up != u32::MAX {
             let a = up as usize;
-            for k in links.range(a) {
+            let reach = scales.receiver(a);
+            for (i, k) in links.range(a).enumerate() {
                 let s = links.source[k] as usize;
                 let transfer = nodes.exitance[s] * links.form_factor[k] as f64;
-                let share = scales.shares(k).find(|&(m, _)| m == e).map_or(0.0, |(_, c)| c as f64);
+                let share = reach.shares(i).find(|&(m, _)| m == e).map_or(0.0, |(_, c)| c as f64);
                 let (landed, kind) = match arrival_direction(nodes, a, s) {
-                    _ if nodes.is_cluster[a] && scales.has_shares(k) => (transfer * share, "member shares"),
-                    Some(w) if nodes.is_cluster[a] && scales.scale[k] > 0.0 => (
-                        transfer * scales.scale[k] as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
+                    _ if nodes.is_cluster[a] && reach.has_shares(i) => (transfer * share, "member shares"),
+                    Some(w) if nodes.is_cluster[a] && reach.scale(i) > 0.0 => (
+                        transfer * reach.scale(i) as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
                         if is_near(nodes, a, s) { "near arrival" } else { "far arrival" },
                     ),
                     _ => (transfer * nodes.open_gain(a), if nodes.is_cluster[a] { "uniform" } else { "element" }),
@@ -288,17 +289,18 @@ fn object_breakdown(scene: &radray::scene::SceneDescription, objects: &[String])
             let mut up = e as u32;
             while up != u32::MAX {
                 let a = up as usize;
-                for k in links.range(a) {
+                let reach = scales.receiver(a);
+                for (i, k) in links.range(a).enumerate() {
                     let s = links.source[k] as usize;
                     let f = links.form_factor[k] as f64;
                     let (gain, kind) = if !nodes.is_cluster[a] {
                         (nodes.open_gain(a), 0)
-                    } else if scales.has_shares(k) {
-                        (scales.shares(k).find(|&(m, _)| m == member).map_or(0.0, |(_, c)| c as f64), 1)
+                    } else if reach.has_shares(i) {
+                        (reach.shares(i).find(|&(m, _)| m == member).map_or(0.0, |(_, c)| c as f64), 1)
                     } else {
                         match arrival_direction(nodes, a, s) {
-                            Some(w) if scales.scale[k] > 0.0 => (
-                                scales.scale[k] as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
+                            Some(w) if reach.scale(i) > 0.0 => (
+                                reach.scale(i) as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
                                 if is_near(nodes, a, s) { 3 } else { 2 },
                             ),
                             _ => (nodes.open_gain(a), 4),
@@ -625,17 +627,18 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 let mut up = e as u32;
                 while up != u32::MAX {
                     let a = up as usize;
-                    for k in links.range(a) {
+                    let reach = scales.receiver(a);
+                    for (i, k) in links.range(a).enumerate() {
                         let s = links.source[k] as usize;
                         let t = mean(nodes.exitance[s] - nodes.emission[s].as_dvec3()) * links.form_factor[k] as f64;
                         let (gain, kind) = if !nodes.is_cluster[a] {
                             (nodes.open_gain(a), 0)
-                        } else if scales.has_shares(k) {
-                            (scales.shares(k).find(|&(m, _)| m == member).map_or(0.0, |(_, c)| c as f64), 1)
+                        } else if reach.has_shares(i) {
+                            (reach.shares(i).find(|&(m, _)| m == member).map_or(0.0, |(_, c)| c as f64), 1)
                         } else {
                             match arrival_direction(nodes, a, s) {
-                                Some(w) if scales.scale[k] > 0.0 => (
-                                    scales.scale[k] as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
+                                Some(w) if reach.scale(i) > 0.0 => (
+                                    reach.scale(i) as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
                                     if is_near(nodes, a, s) { 3 } else { 2 },
                                 ),
                                 _ => (nodes.open_gain(a), 4),

@@ -60,20 +60,20 @@ impl Irradiance {
     }
 }
 
-/// How each link of a cluster receiver reaches the receiver's members, per link (`Irradiance`):
+/// How each link of a cluster receiver reaches the receiver's members, per link (`Irradiance`; read
+/// through `ArrivalScales::receiver`):
 ///
-/// - `scale[l]` = s_l = A_R / D_open,R(ω_l): the link becomes an `Arrival` of head-on irradiance
+/// - scale s_l = A_R / D_open,R(ω_l): the link becomes an `Arrival` of head-on irradiance
 ///   w_l = s_l·F_l·B_S, each member taking w_l·max(0, n_i·ω_l);
-/// - `share_offsets[l] < share_offsets[l + 1]`: the link's ends hold at most `SHARE_PAIRS`
-///   (member, source member) pairs (`Nodes::members`), and its power goes to each member i by the
-///   member's own unoccluded form factor to the source, F_i = Σ_σ F(x_i → σ) (Lambert's exact
-///   `form_factor::point_to_polygon` from the member's centroid x_i to each source member σ):
-///   G_i += F_l·B_S·c_i, c_i = A_R·F_i / Σ_j A_open,j·F_j (`share_member` / `share_factor` over
-///   `share_offsets[l]..share_offsets[l + 1]`), which conserves the link's power exactly and follows
-///   each member's own distance and orientation where ω between the centres is a poor stand-in (a
-///   near link, a far one at a grazing angle). (The 3-point rule per member cost 2.5× the CPU-s of
-///   the scales on procedural:16000 for no measurable gain on cornell_original; 64 pairs instead of
-///   16 cost +5 CPU-s there, session 13);
+/// - shares, when the link's ends hold at most `SHARE_PAIRS` (member, source member) pairs
+///   (`Nodes::members`): its power goes to each member i by the member's own unoccluded form factor
+///   to the source, F_i = Σ_σ F(x_i → σ) (Lambert's exact `form_factor::point_to_polygon` from the
+///   member's centroid x_i to each source member σ): G_i += F_l·B_S·c_i, c_i = A_R·F_i / Σ_j
+///   A_open,j·F_j, which conserves the link's power exactly and follows each member's own distance
+///   and orientation where ω between the centres is a poor stand-in (a near link, a far one at a
+///   grazing angle). (The 3-point rule per member cost 2.5× the CPU-s of the scales on
+///   procedural:16000 for no measurable gain on cornell_original; 64 pairs instead of 16 cost +5
+///   CPU-s there, session 13);
 /// - near links (`links::is_near`) to a receiver of at most `NEAR_SHARE_MEMBERS` members with more
 ///   pairs: member shares too, c_i = A_R·F̂_i / Σ_j A_open,j·F̂_j with F̂_i member i's form factor to
 ///   `NEAR_SHARE_SAMPLES` source elements sampled by area (`sampled_member_shares`). The ends of a near
@@ -84,84 +84,254 @@ impl Irradiance {
 /// - neither (s_l = 0): the transfer is uniform over the receiver: receivers that are elements, a
 ///   cluster's self-link, and links whose direction no open member faces.
 ///
-/// Depends on the geometry only, so a solve computes it once for its links.
+/// Depends on the geometry only (the two ends), so a solve computes it once per link and hands the
+/// links that survive a refinement pass on (`reusing`). Stored compactly (session 15): only cluster
+/// receivers' links have entries, and a share names its member by its index in the receiver's member
+/// list (a byte: at most `NEAR_SHARE_MEMBERS` = 256 members), held once per receiver; on
+/// procedural:16000 6.5 M shares of 0.47 M links take 5 bytes each instead of 8 plus a heap vector.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ArrivalScales {
-    pub scale: Vec<f32>,
-    pub share_offsets: Vec<u32>,
-    pub share_member: Vec<u32>,
-    pub share_factor: Vec<f32>,
+    /// Per node (and one past the last): the first of its links' entries in `source`, `scale` and
+    /// `share_offsets`, in the order of its `Links` row; only cluster receivers have entries.
+    link_offsets: Vec<u32>,
+    /// Per entry: the link's source (to find a surviving link's entry, `reusing`).
+    source: Vec<u32>,
+    /// Per entry: s_l, 0 when the link has shares or is uniform.
+    scale: Vec<f32>,
+    /// Per entry (and one past the last): the first of its shares in `share_member` / `share_factor`.
+    share_offsets: Vec<u32>,
+    /// Per node (and one past the last): the first of its members in `members`; only receivers with
+    /// a link with shares hold them.
+    member_offsets: Vec<u32>,
+    /// The members (`Nodes::members`, in that order) of receivers with shares.
+    members: Vec<u32>,
+    /// Per share: its member's index in the receiver's `members`.
+    share_member: Vec<u8>,
+    /// Per share: c_i.
+    share_factor: Vec<f32>,
 }
 
-/// What one link of a cluster receiver becomes (see `ArrivalScales`).
-enum Reach {
-    Uniform,
-    Arrival(f32),
-    Shares(Vec<(u32, f32)>),
+// A share's member index is a byte.
+const _: () = assert!(NEAR_SHARE_MEMBERS <= 256 && SHARE_PAIRS <= 256);
+
+/// The `ArrivalScales` of one receiver's links, by the link's position i in the receiver's `Links`
+/// row (link k = `links.range(r).start + i`); empty (every link uniform) for an element receiver.
+#[derive(Clone, Copy, Debug)]
+pub struct ReceiverScales<'a> {
+    scale: &'a [f32],
+    share_offsets: &'a [u32],
+    members: &'a [u32],
+    share_member: &'a [u8],
+    share_factor: &'a [f32],
 }
+
+impl<'a> ReceiverScales<'a> {
+    /// s of the receiver's link i (0: shares or uniform).
+    pub fn scale(&self, i: usize) -> f32 {
+        self.scale.get(i).copied().unwrap_or(0.0)
+    }
+
+    /// Whether the receiver's link i reaches its members by shares.
+    pub fn has_shares(&self, i: usize) -> bool {
+        i < self.scale.len() && self.share_offsets[i] < self.share_offsets[i + 1]
+    }
+
+    /// The (member node, c_i) shares of the receiver's link i, empty when it has none.
+    pub fn shares(&self, i: usize) -> impl Iterator<Item = (usize, f32)> + 'a {
+        let range = if i < self.scale.len() {
+            self.share_offsets[i] as usize..self.share_offsets[i + 1] as usize
+        } else {
+            0..0
+        };
+        let (members, member, factor) = (self.members, self.share_member, self.share_factor);
+        range.map(move |j| (members[member[j] as usize] as usize, factor[j]))
+    }
+}
+
+/// What `receiver_reach` gives for one cluster receiver, in the layout of `ArrivalScales` over its
+/// links.
+#[derive(Default)]
+struct ReceiverReach {
+    scale: Vec<f32>,
+    share_count: Vec<u32>,
+    members: Vec<u32>,
+    share_member: Vec<u8>,
+    share_factor: Vec<f32>,
+}
+
+/// Cluster receivers whose `ReceiverReach` are computed in parallel at a time: what is held twice
+/// (in the receivers' own vectors and in the flat arrays) is at most one block's.
+const RECEIVER_BLOCK: usize = 512;
 
 impl ArrivalScales {
     /// The scales or shares of every link: per cluster receiver, one walk over its members summing
     /// A_open,j·max(0, n_j·ω_l) for all its links at once (O(members × links) per receiver), and the
-    /// member form factors of links with at most `SHARE_PAIRS` pairs; receivers in parallel, each
-    /// in a fixed order, so the result does not depend on threads.
+    /// member form factors of links with at most `SHARE_PAIRS` pairs or near ones
+    /// (`sampled_member_shares`); receivers in parallel, each in a fixed order, so the result does
+    /// not depend on threads.
     pub fn new(nodes: &Nodes, links: &Links) -> ArrivalScales {
-        let receivers: Vec<usize> = (0..links.offsets.len().saturating_sub(1))
-            .filter(|&r| nodes.is_cluster[r] && !links.range(r).is_empty())
-            .collect();
-        let rows: Vec<(usize, Vec<Reach>)> =
-            receivers.par_iter().map(|&r| (r, receiver_reach(nodes, links, r))).collect();
-        let mut out = ArrivalScales {
-            scale: vec![0.0; links.len()],
-            share_offsets: vec![0; links.len() + 1],
-            share_member: Vec::new(),
-            share_factor: Vec::new(),
-        };
-        let mut rows = rows.into_iter().peekable();
-        for k in 0..links.len() {
-            // Links in receiver order: rows hold the cluster receivers' links, in order.
-            while rows.peek().is_some_and(|(r, _)| links.range(*r).end <= k) {
-                rows.next();
-            }
-            if let Some((r, row)) = rows.peek_mut() {
-                if links.range(*r).contains(&k) {
-                    match std::mem::replace(&mut row[k - links.range(*r).start], Reach::Uniform) {
-                        Reach::Uniform => {}
-                        Reach::Arrival(s) => out.scale[k] = s,
-                        Reach::Shares(shares) => {
-                            for (m, c) in shares {
-                                out.share_member.push(m);
-                                out.share_factor.push(c);
-                            }
-                        }
-                    }
-                }
-            }
-            out.share_offsets[k + 1] = out.share_member.len() as u32;
+        ArrivalScales::reusing(nodes, links, None)
+    }
+
+    /// `new`, taking each link's scale or shares from `previous` (the scales of earlier links over
+    /// the same nodes) when it holds a link of the same receiver and source. A link's scale and
+    /// shares depend on its two ends' geometry only (members, their open areas, normals and
+    /// corners, and the source elements sampled by area), which refinement never changes:
+    /// subdivision appends pieces below input triangles, and members stop at input triangles. So
+    /// the result is bit for bit `new`'s, and a refinement pass computes only the links it made.
+    pub fn reusing(nodes: &Nodes, links: &Links, previous: Option<&ArrivalScales>) -> ArrivalScales {
+        let node_count = links.offsets.len().saturating_sub(1);
+        let receivers: Vec<usize> =
+            (0..node_count).filter(|&r| nodes.is_cluster[r] && !links.range(r).is_empty()).collect();
+        let mut link_offsets = vec![0u32; node_count + 1];
+        for &r in &receivers {
+            link_offsets[r + 1] = links.range(r).len() as u32;
         }
+        for r in 0..node_count {
+            link_offsets[r + 1] += link_offsets[r];
+        }
+        let entries = link_offsets[node_count] as usize;
+        let mut out = ArrivalScales {
+            link_offsets,
+            source: Vec::with_capacity(entries),
+            scale: Vec::with_capacity(entries),
+            share_offsets: Vec::with_capacity(entries + 1),
+            member_offsets: vec![0u32; node_count + 1],
+            ..Default::default()
+        };
+        out.share_offsets.push(0);
+        for block in receivers.chunks(RECEIVER_BLOCK) {
+            let rows: Vec<ReceiverReach> =
+                block.par_iter().map(|&r| receiver_reach(nodes, links, r, previous)).collect();
+            let shares: usize = rows.iter().map(|row| row.share_member.len()).sum();
+            out.share_member.reserve_exact(shares);
+            out.share_factor.reserve_exact(shares);
+            for (&r, row) in block.iter().zip(rows) {
+                out.source.extend(links.range(r).map(|k| links.source[k]));
+                out.scale.extend_from_slice(&row.scale);
+                for c in row.share_count {
+                    let last = *out.share_offsets.last().expect("starts with 0");
+                    out.share_offsets.push(last + c);
+                }
+                out.member_offsets[r + 1] = row.members.len() as u32;
+                out.members.extend_from_slice(&row.members);
+                out.share_member.extend_from_slice(&row.share_member);
+                out.share_factor.extend_from_slice(&row.share_factor);
+            }
+        }
+        for r in 0..node_count {
+            out.member_offsets[r + 1] += out.member_offsets[r];
+        }
+        out.members.shrink_to_fit();
         out
     }
 
-    /// The (member, c_i) shares of link `k`, empty when it has none.
-    pub fn shares(&self, k: usize) -> impl Iterator<Item = (usize, f32)> + '_ {
-        let range = self.share_offsets[k] as usize..self.share_offsets[k + 1] as usize;
-        range.map(move |i| (self.share_member[i] as usize, self.share_factor[i]))
+    /// The scales of receiver `r`'s links.
+    pub fn receiver(&self, r: usize) -> ReceiverScales<'_> {
+        if r + 1 >= self.link_offsets.len() {
+            return ReceiverScales {
+                scale: &[],
+                share_offsets: &[0],
+                members: &[],
+                share_member: &[],
+                share_factor: &[],
+            };
+        }
+        let entries = self.link_offsets[r] as usize..self.link_offsets[r + 1] as usize;
+        let members = self.member_offsets[r] as usize..self.member_offsets[r + 1] as usize;
+        ReceiverScales {
+            scale: &self.scale[entries.clone()],
+            share_offsets: &self.share_offsets[entries.start..entries.end + 1],
+            members: &self.members[members],
+            share_member: &self.share_member,
+            share_factor: &self.share_factor,
+        }
     }
 
-    /// Whether link `k` reaches its receiver's members by shares.
-    pub fn has_shares(&self, k: usize) -> bool {
-        self.share_offsets[k] < self.share_offsets[k + 1]
+    /// Links with shares and shares in all.
+    pub fn share_counts(&self) -> (usize, usize) {
+        let links = self.share_offsets.windows(2).filter(|w| w[0] < w[1]).count();
+        (links, self.share_member.len())
+    }
+
+    /// Bytes it holds.
+    pub fn memory_bytes(&self) -> usize {
+        4 * (self.link_offsets.len()
+            + self.source.len()
+            + self.scale.len()
+            + self.share_offsets.len()
+            + self.member_offsets.len()
+            + self.members.len()
+            + self.share_factor.len())
+            + self.share_member.len()
     }
 }
 
-/// `ArrivalScales` of the links of cluster receiver `r`, in link order.
-fn receiver_reach(nodes: &Nodes, links: &Links, r: usize) -> Vec<Reach> {
+/// `ArrivalScales` of the links of cluster receiver `r`, in link order; a link of the same source in
+/// `previous` is copied, the others are computed.
+fn receiver_reach(nodes: &Nodes, links: &Links, r: usize, previous: Option<&ArrivalScales>) -> ReceiverReach {
+    let range = links.range(r);
+    let mut out =
+        ReceiverReach { scale: vec![0.0; range.len()], share_count: vec![0; range.len()], ..Default::default() };
+    // The previous entries of this receiver by source.
+    let old = previous.filter(|p| r + 1 < p.link_offsets.len());
+    let mut known: Vec<(u32, usize)> = match old {
+        Some(p) => (p.link_offsets[r] as usize..p.link_offsets[r + 1] as usize).map(|e| (p.source[e], e)).collect(),
+        None => Vec::new(),
+    };
+    known.sort_unstable();
+    let reused = |s: u32| known.binary_search_by_key(&s, |&(source, _)| source).ok().map(|i| known[i].1);
+    let fresh: Vec<usize> = range.clone().filter(|&k| reused(links.source[k]).is_none()).collect();
     let mut members = Vec::new();
     nodes.members(r, &mut members);
+    let mut computed = compute_reach(nodes, links, r, &members, &fresh).into_iter();
+    for (i, k) in range.enumerate() {
+        match reused(links.source[k]) {
+            Some(e) => {
+                let old = old.expect("known entries come from previous");
+                out.scale[i] = old.scale[e];
+                let shares = old.share_offsets[e] as usize..old.share_offsets[e + 1] as usize;
+                out.share_count[i] = shares.len() as u32;
+                out.share_member.extend_from_slice(&old.share_member[shares.clone()]);
+                out.share_factor.extend_from_slice(&old.share_factor[shares]);
+            }
+            None => match computed.next().expect("one reach per fresh link") {
+                Reach::Uniform => {}
+                Reach::Arrival(s) => out.scale[i] = s,
+                Reach::Shares(shares) => {
+                    out.share_count[i] = shares.len() as u32;
+                    for (m, c) in shares {
+                        out.share_member.push(m);
+                        out.share_factor.push(c);
+                    }
+                }
+            },
+        }
+    }
+    if !out.share_member.is_empty() {
+        out.members = members.iter().map(|&m| m as u32).collect();
+    }
+    out
+}
+
+/// What one link of a cluster receiver becomes (see `ArrivalScales`); shares as (index in the
+/// receiver's members, c_i).
+enum Reach {
+    Uniform,
+    Arrival(f32),
+    Shares(Vec<(u8, f32)>),
+}
+
+/// The reach of links `fresh` (indices into `links`, all of receiver `r` of members `members`), in
+/// that order.
+fn compute_reach(nodes: &Nodes, links: &Links, r: usize, members: &[usize], fresh: &[usize]) -> Vec<Reach> {
+    if fresh.is_empty() {
+        return Vec::new();
+    }
     let directions: Vec<Option<Vec3>> =
-        links.range(r).map(|k| arrival_direction(nodes, r, links.source[k] as usize)).collect();
+        fresh.iter().map(|&k| arrival_direction(nodes, r, links.source[k] as usize)).collect();
     let mut sums = vec![0.0f64; directions.len()];
-    for &m in &members {
+    for &m in members {
         let (a, n) = (nodes.open_area[m] as f64, nodes.normal[m]);
         if !(a > 0.0) {
             continue;
@@ -174,23 +344,23 @@ fn receiver_reach(nodes: &Nodes, links: &Links, r: usize) -> Vec<Reach> {
     }
     let area = nodes.area[r] as f64;
     let (mut sources, mut picks) = (Vec::new(), Vec::new());
-    links
-        .range(r)
+    fresh
+        .iter()
         .zip(directions.iter().zip(sums))
-        .map(|(k, (d, sum))| {
+        .map(|(&k, (d, sum))| {
             let s = links.source[k] as usize;
             if d.is_none() {
                 return Reach::Uniform;
             }
             if members.len() <= SHARE_PAIRS && nodes.member_count_within(s, SHARE_PAIRS / members.len().max(1)) {
                 nodes.members(s, &mut sources);
-                if let Some(shares) = member_shares(nodes, &members, &sources, area) {
+                if let Some(shares) = member_shares(nodes, members, &sources, area) {
                     return Reach::Shares(shares);
                 }
             }
             if members.len() <= NEAR_SHARE_MEMBERS && is_near(nodes, r, s) {
                 sampled_source_elements(nodes, s, &mut picks);
-                if let Some(shares) = sampled_member_shares(nodes, &members, &picks, area) {
+                if let Some(shares) = sampled_member_shares(nodes, members, &picks, area) {
                     return Reach::Shares(shares);
                 }
             }
@@ -252,7 +422,7 @@ fn sampled_member_shares(
     members: &[usize],
     picks: &[(usize, f64)],
     receiver_area: f64,
-) -> Option<Vec<(u32, f32)>> {
+) -> Option<Vec<(u8, f32)>> {
     shares_by_form_factor(nodes, members, receiver_area, |m| {
         picks
             .iter()
@@ -263,35 +433,36 @@ fn sampled_member_shares(
 }
 
 /// c_i = A_R·F_i / Σ_j A_open,j·F_j over the open members (`open_area` > 0) with F_i =
-/// `form_factor(i)` > 0, as (member, c_i); `None` when every F_i is 0. Σ_i A_open,i·c_i = A_R: the
-/// shares keep the link's power.
+/// `form_factor(i)` > 0, as (index i in `members`, at most 256 of them, c_i); `None` when every F_i
+/// is 0. Σ_i A_open,i·c_i = A_R: the shares keep the link's power.
 fn shares_by_form_factor(
     nodes: &Nodes,
     members: &[usize],
     receiver_area: f64,
     form_factor: impl Fn(usize) -> f64,
-) -> Option<Vec<(u32, f32)>> {
+) -> Option<Vec<(u8, f32)>> {
+    debug_assert!(members.len() <= 256);
     let mut form_factors = Vec::with_capacity(members.len());
     let mut total = 0.0f64;
-    for &m in members {
+    for (i, &m) in members.iter().enumerate() {
         let open = nodes.open_area[m] as f64;
         if !(open > 0.0) {
             continue;
         }
         let f = form_factor(m);
         if f > 0.0 {
-            form_factors.push((m as u32, f));
+            form_factors.push((i as u8, f));
             total += open * f;
         }
     }
     (total > 0.0).then(|| form_factors.into_iter().map(|(m, f)| (m, (receiver_area * f / total) as f32)).collect())
 }
 
-/// (member, c_i = A_R·F_i / Σ_j A_open,j·F_j) for the open members with F_i > 0, F_i = Σ_σ F(x_i →
+/// (member index, c_i = A_R·F_i / Σ_j A_open,j·F_j) for the open members with F_i > 0, F_i = Σ_σ F(x_i →
 /// σ) from the member's centroid over the source's members `leaves` (`Nodes::members`: its own
 /// triangle for an element, exact in the source; pairs within one input triangle skipped); `None`
 /// when no open member sees the source.
-fn member_shares(nodes: &Nodes, members: &[usize], leaves: &[usize], receiver_area: f64) -> Option<Vec<(u32, f32)>> {
+fn member_shares(nodes: &Nodes, members: &[usize], leaves: &[usize], receiver_area: f64) -> Option<Vec<(u8, f32)>> {
     shares_by_form_factor(nodes, members, receiver_area, |m| {
         leaves
             .iter()
@@ -335,16 +506,17 @@ pub fn gather_into(
 ) -> (DVec3, DVec3) {
     let (mut uniform, mut mean) = (DVec3::ZERO, DVec3::ZERO);
     let cluster = nodes.is_cluster[receiver];
-    for k in links.range(receiver) {
+    let reach = scales.receiver(receiver);
+    for (i, k) in links.range(receiver).enumerate() {
         let s = links.source[k] as usize;
         let transfer = exitance[s] * links.form_factor[k] as f64;
         mean += transfer;
         if !cluster {
             uniform += transfer;
-        } else if scales.has_shares(k) {
-            direct.extend(scales.shares(k).map(|(m, c)| (m, transfer * c as f64)));
-        } else if let (Some(towards), true) = (arrival_direction(nodes, receiver, s), scales.scale[k] > 0.0) {
-            arrivals.push(Arrival { towards, irradiance: transfer * scales.scale[k] as f64 });
+        } else if reach.has_shares(i) {
+            direct.extend(reach.shares(i).map(|(m, c)| (m, transfer * c as f64)));
+        } else if let (Some(towards), true) = (arrival_direction(nodes, receiver, s), reach.scale(i) > 0.0) {
+            arrivals.push(Arrival { towards, irradiance: transfer * reach.scale(i) as f64 });
         } else {
             uniform += transfer;
         }

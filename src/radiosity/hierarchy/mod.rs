@@ -46,6 +46,7 @@ use crate::material::SceneTextures;
 use crate::scene::SceneDescription;
 use contact::{split_at_contacts, ContactProbe};
 use estimates::{EstimateHooks, EstimateLog, Stopped};
+use gather::ArrivalScales;
 use interpolate::LeafMesh;
 use links::{refinement_error, LinkRecord, Links, LINK_BYTES};
 use nodes::{Nodes, NODE_BYTES};
@@ -473,6 +474,8 @@ pub fn solve_logged(
         links = state.restore(&mut nodes, &mut stats)?;
         first_pass = state.pass + 1;
     }
+    // The `ArrivalScales` of `links` once computed; each pass's are computed from the pass before's.
+    let mut scales: Option<ArrivalScales> = None;
     match reuse {
         None => {
             for pass in first_pass..=params.refinement_passes {
@@ -495,7 +498,9 @@ pub fn solve_logged(
                 let (records, self_links) = if pass == 1 {
                     (Vec::new(), if nodes.is_cluster[root] { vec![root as u32] } else { Vec::new() })
                 } else {
-                    (links.to_records(), Vec::new())
+                    // The links as records only: refinement makes new ones (the scales keep their
+                    // own sources, `ArrivalScales::reusing`).
+                    (std::mem::take(&mut links).to_records(), Vec::new())
                 };
                 let outcome = refine_logged(
                     &mut nodes,
@@ -513,13 +518,17 @@ pub fn solve_logged(
                 if shard_pass == Some(pass) {
                     break;
                 }
-                sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, hooks.stop, on_progress)?;
+                let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
+                sweep_pass(&mut nodes, &links, &current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
+                scales = Some(current);
             }
         }
         Some(kept) => {
             stats.refinement_passes = 1;
             stats.error_after_pass_w.push(refine::total_error(&nodes, &links.to_records()));
-            sweep_pass(&mut nodes, &links, root, params, 1, &mut stats, hooks.stop, on_progress)?;
+            let first = ArrivalScales::new(&nodes, &links);
+            sweep_pass(&mut nodes, &links, &first, root, params, 1, &mut stats, hooks.stop, on_progress)?;
+            scales = Some(first);
             for pass in 2..=params.refinement_passes {
                 let ratio = |n: &Nodes, l: &LinkRecord, threshold: f64| {
                     refinement_error(n, l) / (threshold * n.area[l.receiver as usize].max(settings.floor_area) as f64)
@@ -548,10 +557,14 @@ pub fn solve_logged(
                 let error_after_w = refine::total_error(&nodes, &records);
                 links = Links::from_records(nodes.len(), records);
                 stats.add_refinement(pass, &outcome, error_after_w);
-                sweep_pass(&mut nodes, &links, root, params, pass, &mut stats, hooks.stop, on_progress)?;
+                let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
+                sweep_pass(&mut nodes, &links, &current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
+                scales = Some(current);
             }
         }
     }
+    // Not needed past the sweeps; freed before the leaf mesh is built.
+    drop(scales);
     stats.nodes = nodes.len();
     stats.links = links.len();
     stats.bytes = nodes.len() * NODE_BYTES + links.memory_bytes();
@@ -572,12 +585,13 @@ impl HierarchyStats {
     }
 }
 
-/// The Gauss-Seidel sweeps of pass `pass` over `links` (warm-started from the nodes' exitance),
-/// recorded in `stats`; `Stopped` when `stop` asks between two sweeps.
+/// The Gauss-Seidel sweeps of pass `pass` over `links` with their `scales` (warm-started from the
+/// nodes' exitance), recorded in `stats`; `Stopped` when `stop` asks between two sweeps.
 #[allow(clippy::too_many_arguments)]
 fn sweep_pass(
     nodes: &mut Nodes,
     links: &Links,
+    scales: &ArrivalScales,
     root: usize,
     params: &HierarchyParams,
     pass: u32,
@@ -590,7 +604,7 @@ fn sweep_pass(
     };
     let (p, sweeps) = (params, params.max_sweeps);
     let (sweeps, converged) =
-        solve::solve_until(nodes, links, root, p.relaxation, p.tolerance, sweeps, &mut on_sweep, stop)
+        solve::solve_until(nodes, links, scales, root, p.relaxation, p.tolerance, sweeps, &mut on_sweep, stop)
             .ok_or(Stopped)?;
     stats.sweeps += sweeps;
     stats.converged = converged;

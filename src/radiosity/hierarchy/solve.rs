@@ -82,15 +82,19 @@ pub fn solve(
     max_sweeps: u32,
     on_sweep: &mut dyn FnMut(u32, SweepChange),
 ) -> (u32, bool) {
-    solve_until(nodes, links, root, relaxation, tolerance, max_sweeps, on_sweep, &|| false).expect("never stopped")
+    let scales = ArrivalScales::new(nodes, links);
+    solve_until(nodes, links, &scales, root, relaxation, tolerance, max_sweeps, on_sweep, &|| false)
+        .expect("never stopped")
 }
 
-/// `solve` that looks at `stop` before each sweep: `None` when it asked (the exitance is then that
-/// of the last finished sweep).
+/// `solve` over the links' `scales` (`ArrivalScales`, which the caller keeps from one refinement
+/// pass to the next) that looks at `stop` before each sweep: `None` when it asked (the exitance is
+/// then that of the last finished sweep).
 #[allow(clippy::too_many_arguments)]
 pub fn solve_until(
     nodes: &mut Nodes,
     links: &Links,
+    scales: &ArrivalScales,
     root: usize,
     relaxation: f64,
     tolerance: f64,
@@ -98,12 +102,11 @@ pub fn solve_until(
     on_sweep: &mut dyn FnMut(u32, SweepChange),
     stop: &dyn Fn() -> bool,
 ) -> Option<(u32, bool)> {
-    let scales = ArrivalScales::new(nodes, links);
     for k in 1..=max_sweeps {
         if stop() {
             return None;
         }
-        let c = sweep(nodes, links, &scales, root, relaxation);
+        let c = sweep(nodes, links, scales, root, relaxation);
         on_sweep(k, c);
         if c.max_change <= tolerance * c.max_exitance {
             return Some((k, true));
