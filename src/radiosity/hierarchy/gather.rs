@@ -204,8 +204,8 @@ impl ArrivalScales {
             let rows: Vec<ReceiverReach> =
                 block.par_iter().map(|&r| receiver_reach(nodes, links, r, previous)).collect();
             let shares: usize = rows.iter().map(|row| row.share_member.len()).sum();
-            out.share_member.reserve_exact(shares);
-            out.share_factor.reserve_exact(shares);
+            reserve_growing(&mut out.share_member, shares);
+            reserve_growing(&mut out.share_factor, shares);
             for (&r, row) in block.iter().zip(rows) {
                 out.source.extend(links.range(r).map(|k| links.source[k]));
                 out.scale.extend_from_slice(&row.scale);
@@ -223,6 +223,8 @@ impl ArrivalScales {
             out.member_offsets[r + 1] += out.member_offsets[r];
         }
         out.members.shrink_to_fit();
+        out.share_member.shrink_to_fit();
+        out.share_factor.shrink_to_fit();
         out
     }
 
@@ -247,23 +249,14 @@ impl ArrivalScales {
             share_factor: &self.share_factor,
         }
     }
+}
 
-    /// Links with shares and shares in all.
-    pub fn share_counts(&self) -> (usize, usize) {
-        let links = self.share_offsets.windows(2).filter(|w| w[0] < w[1]).count();
-        (links, self.share_member.len())
-    }
-
-    /// Bytes it holds.
-    pub fn memory_bytes(&self) -> usize {
-        4 * (self.link_offsets.len()
-            + self.source.len()
-            + self.scale.len()
-            + self.share_offsets.len()
-            + self.member_offsets.len()
-            + self.members.len()
-            + self.share_factor.len())
-            + self.share_member.len()
+/// Room for `more` elements in `v`, growing it by at least a quarter of its length: a few
+/// reallocations in all (not one per block of receivers), at most a quarter unused before the
+/// caller's `shrink_to_fit`.
+fn reserve_growing<T>(v: &mut Vec<T>, more: usize) {
+    if v.capacity() - v.len() < more {
+        v.reserve_exact(more.max(v.len() / 4));
     }
 }
 
