@@ -1,8 +1,11 @@
 //! Elements buried under one-sided surfaces: the floor under a block, the ceiling behind a lamp that
 //! hangs just below it. Pass one sees the backs of one-sided surfaces as opaque, so such elements get
 //! (correctly) almost no light; but they share vertices with visible neighbours, and Gouraud averaging
-//! would pull those vertices dark. `Mesh::vertex_average` leaves buried elements out.
+//! would pull those vertices dark. `Mesh::vertex_average` leaves buried elements out. Where a
+//! surface's elements are all buried at their centres but partly open (an object piercing the
+//! surface), `bury` moves their hemicubes' eyes to an open point instead (`Mesh::element_eye`).
 
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::accel::Accel;
@@ -17,41 +20,102 @@ const RAYS_SIDE: usize = 4;
 /// does not describe the visible surface around it.
 pub const BURIED_SHARE: f32 = 0.5;
 
-/// The share of each element's cosine-weighted hemisphere, seen from its centre lifted by 10⁻³ of its
+/// The share of element i's cosine-weighted hemisphere, seen from `point` on it lifted by 10⁻³ of its
 /// size along the normal (where its hemicube's eye sits), that ends on the back of a one-sided surface:
 /// the fraction of 16 stratified cosine-distributed rays (u₁, u₂) ∈ {(a + ½)/4, (b + ½)/4} with
-/// direction (√u₁ cos 2πu₂, √u₁ sin 2πu₂, √(1 − u₁)) in the element's frame. Deterministic; parallel
-/// over elements.
-pub fn hidden_share(mesh: &Mesh, accel: &Accel) -> Vec<f32> {
+/// direction (√u₁ cos 2πu₂, √u₁ sin 2πu₂, √(1 − u₁)) in the element's frame. Deterministic.
+pub fn hidden_share_at(mesh: &Mesh, accel: &Accel, i: usize, point: Vec3) -> f32 {
     let e = &mesh.elements;
-    (0..e.len())
-        .into_par_iter()
-        .map(|i| {
-            let n = e.normal[i];
-            let origin = leave_surface(e.centre[i], n, 1e-3 * e.area[i].sqrt());
-            let (t, b) = n.any_orthonormal_pair();
-            let mut hidden = 0usize;
-            for a in 0..RAYS_SIDE {
-                for c in 0..RAYS_SIDE {
-                    let u1 = (a as f32 + 0.5) / RAYS_SIDE as f32;
-                    let u2 = (c as f32 + 0.5) / RAYS_SIDE as f32;
-                    let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
-                    let dir = (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).sqrt()).normalize();
-                    if let Some(hit) = accel.closest_hit(origin, dir, 0.0, f32::INFINITY) {
-                        let tri = hit.triangle as usize;
-                        let front = e.normal[mesh.triangle_element[tri] as usize];
-                        if dir.dot(front) > 0.0 && mesh.triangle_back_element[tri] == NONE {
-                            hidden += 1;
-                        }
-                    }
+    let n = e.normal[i];
+    let origin = leave_surface(point, n, 1e-3 * e.area[i].sqrt());
+    let (t, b) = n.any_orthonormal_pair();
+    let mut hidden = 0usize;
+    for a in 0..RAYS_SIDE {
+        for c in 0..RAYS_SIDE {
+            let u1 = (a as f32 + 0.5) / RAYS_SIDE as f32;
+            let u2 = (c as f32 + 0.5) / RAYS_SIDE as f32;
+            let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
+            let dir = (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).sqrt()).normalize();
+            if let Some(hit) = accel.closest_hit(origin, dir, 0.0, f32::INFINITY) {
+                let tri = hit.triangle as usize;
+                let front = e.normal[mesh.triangle_element[tri] as usize];
+                if dir.dot(front) > 0.0 && mesh.triangle_back_element[tri] == NONE {
+                    hidden += 1;
                 }
             }
-            hidden as f32 / (RAYS_SIDE * RAYS_SIDE) as f32
+        }
+    }
+    hidden as f32 / (RAYS_SIDE * RAYS_SIDE) as f32
+}
+
+/// `hidden_share_at` every element's centre; parallel over elements.
+pub fn hidden_share(mesh: &Mesh, accel: &Accel) -> Vec<f32> {
+    (0..mesh.elements.len()).into_par_iter().map(|i| hidden_share_at(mesh, accel, i, mesh.elements.centre[i])).collect()
+}
+
+/// How far from the centre towards a corner or an edge's midpoint the other eyes an element may take
+/// lie (`open_eye`): inside the element, clear of its edges.
+const EYE_REACH: f32 = 0.75;
+
+/// An open point of element i, whose centre is buried: of the points c + 0.75·(q − c) for q its
+/// corners and edge midpoints (c its centre), the first least hidden one, if at most `BURIED_SHARE`
+/// of its hemisphere is hidden.
+fn open_eye(mesh: &Mesh, accel: &Accel, i: usize) -> Option<Vec3> {
+    let centre = mesh.elements.centre[i];
+    let corners: Vec<Vec3> = mesh.elements.polygon(&mesh.positions, i).collect();
+    let midpoints = (0..corners.len()).map(|k| (corners[k] + corners[(k + 1) % corners.len()]) * 0.5);
+    let candidates = corners.iter().copied().chain(midpoints).map(|q| centre + (q - centre) * EYE_REACH);
+    let (share, point) = candidates
+        .map(|p| (hidden_share_at(mesh, accel, i, p), p))
+        .fold((f32::INFINITY, centre), |best, next| if next.0 < best.0 { next } else { best });
+    (share <= BURIED_SHARE).then_some(point)
+}
+
+/// `Mesh::element_buried` and `Mesh::element_eye` for `mesh`. An element is buried when more than
+/// `BURIED_SHARE` of its hemisphere, seen from its centre, is hidden (`hidden_share`). Where every
+/// element at a vertex is buried, the vertex takes the buried values (`Mesh::vertex_average`); that is
+/// right inside a block's footprint, which nobody sees, but where the vertex itself is open the
+/// surface's visible part around it draws as dark as the inside of what buries it: a capital whose
+/// underside is pierced by its column at every element's centre. A buried element with such an open,
+/// stranded vertex (open: `hidden_share_at` a point 2% of the way from it to the centre) measures its
+/// value at an open point of it instead (`open_eye`) and is not buried. Everything else keeps its
+/// centre: the floor under a block stays buried, and its rim's vertices take the open elements'
+/// values. `element_eye` is empty when no eye moved.
+pub fn bury(mesh: &Mesh) -> (Vec<bool>, Vec<Vec3>) {
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let mut buried: Vec<bool> = hidden_share(mesh, &accel).into_iter().map(|s| s > BURIED_SHARE).collect();
+    let mut open_at_vertex = vec![false; mesh.positions.len()];
+    for (e, corners) in mesh.elements.corners.iter().enumerate() {
+        for &v in corners.iter().filter(|&&v| v != NONE) {
+            open_at_vertex[v as usize] |= !buried[e];
+        }
+    }
+    let stranded = |e: usize| {
+        let centre = mesh.elements.centre[e];
+        mesh.elements.corners[e].iter().filter(|&&v| v != NONE && !open_at_vertex[v as usize]).any(|&v| {
+            let corner = mesh.positions[v as usize];
+            hidden_share_at(mesh, &accel, e, corner + (centre - corner) * 0.02) <= BURIED_SHARE
         })
-        .collect()
+    };
+    let candidates: Vec<usize> = (0..buried.len()).filter(|&e| buried[e]).collect();
+    let eyes: Vec<(usize, Vec3)> = candidates
+        .par_iter()
+        .filter(|&&e| stranded(e))
+        .filter_map(|&e| open_eye(mesh, &accel, e).map(|p| (e, p)))
+        .collect();
+    if eyes.is_empty() {
+        return (buried, Vec::new());
+    }
+    let mut eye = mesh.elements.centre.clone();
+    for (e, p) in eyes {
+        eye[e] = p;
+        buried[e] = false;
+    }
+    (buried, eye)
 }
 
 /// `Mesh::element_buried` for `mesh`: elements whose `hidden_share` exceeds `BURIED_SHARE`.
+/// (Centres only, no eyes moved: `bury` is what the methods use.)
 pub fn buried_elements(mesh: &Mesh) -> Vec<bool> {
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     hidden_share(mesh, &accel).into_iter().map(|s| s > BURIED_SHARE).collect()

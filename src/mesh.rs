@@ -109,6 +109,10 @@ pub struct Mesh {
     /// Per element: buried under the back of a one-sided surface (`burial::buried_elements`), left out
     /// of `vertex_average`; empty when not computed (every element counts).
     pub element_buried: Vec<bool>,
+    /// Per element: where its hemicube's eye sits (`Mesh::eye`), set by `burial::bury` when some
+    /// element's centre is buried but part of it is open (a capital's underside pierced by its
+    /// column); empty when every eye is at its element's centre.
+    pub element_eye: Vec<Vec3>,
     /// For a mesh refined by splitting elements (the adaptive method's): the vertex made at the
     /// midpoint of each split edge, keyed by the edge's end vertices (smaller index first), so that
     /// later readers find its T-vertices; empty for a conforming mesh.
@@ -259,6 +263,7 @@ impl Mesh {
             + bytes(&self.surface_has_uv)
             + bytes(&self.element_coverage)
             + bytes(&self.element_buried)
+            + bytes(&self.element_eye)
     }
 
     /// Cuts every surface of the scene into elements of at most `max_element_edge` (see module docs).
@@ -507,6 +512,12 @@ impl Mesh {
         } else {
             None
         }
+    }
+
+    /// Where element i's value is measured: its hemicube's eye before the lift off the surface
+    /// (`element_eye`, else the centre).
+    pub fn eye(&self, i: usize) -> Vec3 {
+        self.element_eye.get(i).copied().unwrap_or(self.elements.centre[i])
     }
 
     /// Per-vertex values from per-element values: the area-weighted mean over the elements that share

@@ -483,7 +483,7 @@ pub fn build_mesh(scene: &SceneDescription, progress: &Progress) -> Result<Mesh,
     let textures = load_textures(scene, progress);
     let mut mesh = Mesh::build_with_textures(scene, edge, Arc::new(textures));
     // Elements buried under the backs of one-sided surfaces stay out of the vertex averages.
-    mesh.element_buried = crate::burial::buried_elements(&mesh);
+    (mesh.element_buried, mesh.element_eye) = crate::burial::bury(&mesh);
     stage.finish(&format!(
         "{} surfaces → {} elements, {} triangles",
         scene.surfaces.len(),

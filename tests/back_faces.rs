@@ -155,3 +155,56 @@ fn elements_under_a_block_are_buried_and_left_out_of_vertex_averages() {
     assert_eq!(at(glam::Vec3::new(0.0, 0.0, 0.0)), 1.0, "rim corner: three open elements, one buried");
     assert_eq!(at(glam::Vec3::new(-1.0, -1.0, 0.0)), 0.0, "inside the footprint: all buried");
 }
+
+/// A 2 × 2 slab at z = 1 facing down, cut into four 1 × 1 elements, on a post [−0.7, 0.7]² × [0, 1] of
+/// one-sided outward faces (no top: the slab covers it) that holds every element's centre (±0.5,
+/// ±0.5) but not its outer corner: a capital on its column. A 6 × 6 floor at z = 0 faces up.
+fn post_scene() -> Mesh {
+    let q = |a: [f32; 3], b: [f32; 3], c: [f32; 3], d: [f32; 3]| {
+        common::surface([a, b, c, d].map(glam::Vec3::from), 0, false)
+    };
+    let (x0, x1, y0, y1, h) = (-0.7, 0.7, -0.7, 0.7, 1.0);
+    let surfaces = vec![
+        q([-3.0, -3.0, 0.0], [3.0, -3.0, 0.0], [3.0, 3.0, 0.0], [-3.0, 3.0, 0.0]),
+        q([-1.0, -1.0, 1.0], [-1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, -1.0, 1.0]),
+        q([x0, y0, 0.0], [x1, y0, 0.0], [x1, y0, h], [x0, y0, h]),
+        q([x1, y0, 0.0], [x1, y1, 0.0], [x1, y1, h], [x1, y0, h]),
+        q([x1, y1, 0.0], [x0, y1, 0.0], [x0, y1, h], [x1, y1, h]),
+        q([x0, y1, 0.0], [x0, y0, 0.0], [x0, y0, h], [x0, y1, h]),
+    ];
+    Mesh::build(&scene(vec![grey()], surfaces), 1.0)
+}
+
+/// An element buried at its centre by something that pierces its surface, with part of it open,
+/// takes its value where it is open: otherwise every element of the capital's underside is buried,
+/// its vertices take the buried (black) values, and the visible ring around the column draws black.
+/// Elements wholly under a block have no open point and stay buried at their centres.
+#[test]
+fn an_underside_pierced_at_every_centre_is_measured_where_it_is_open() {
+    use radray::burial::{bury, hidden_share, BURIED_SHARE};
+    let mut mesh = post_scene();
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    let share = hidden_share(&mesh, &accel);
+    let e = &mesh.elements;
+    let under: Vec<usize> = (0..e.len()).filter(|&i| e.centre[i].z == 1.0 && e.normal[i].z < -0.5).collect();
+    assert_eq!(under.len(), 4);
+    assert!(under.iter().all(|&i| share[i] > BURIED_SHARE), "buried at their centres: {share:?}");
+    let (buried, eye) = bury(&mesh);
+    for &i in &under {
+        let p = eye[i];
+        assert!(!buried[i], "element {i} has an open part");
+        assert!(p.x.abs() > 0.7 || p.y.abs() > 0.7, "element {i}'s eye {p} is outside the post");
+        assert!(p.x.abs() < 1.0 && p.y.abs() < 1.0 && p.z == 1.0, "element {i}'s eye {p} is on the element");
+    }
+    (mesh.element_buried, mesh.element_eye) = (buried, eye);
+    let ff = radray::radiosity::form_factors::compute(&mesh, &common::hemicube_params(64), &|| {});
+    for &i in &under {
+        let row_sum: f64 = ff.row(i).1.iter().map(|&f| f as f64).sum();
+        assert!(row_sum > 0.5, "element {i} sees the floor from its open eye: row sum {row_sum}");
+    }
+
+    let block = block_scene();
+    let (buried, eye) = bury(&block);
+    assert_eq!(buried, radray::burial::buried_elements(&block), "under the block nothing is open");
+    assert!(eye.is_empty(), "no eye moved");
+}

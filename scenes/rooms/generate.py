@@ -19,7 +19,10 @@ Rooms (unit: metres, y up):
                checker floor (Kd 0.8 x map_Kd) and a JPEG wood texture on the tall block;
   rotunda      an octagonal hall (four walls at 45 degrees, 8-gon floor and ceiling) lit by a lamp on a
                diagonal wall, with a sphere on a turned plinth, a column and a torus: tessellated curved
-               objects carrying smooth vertex normals (OBJ vn).
+               objects carrying smooth vertex normals (OBJ vn);
+  vault_hall   a barrel-vaulted nave lit by three window-like emitters on a long wall, with ten finely
+               tessellated columns, a sphere and a torus: about 40k small triangles, a scene near the
+               size where the uniform mesh's matrix stops being the cheaper method.
 
 Conventions (as every radray scene): right-handed; every polygon is counter-clockwise seen from its
 front, and every surface is one-sided and faces into the room (room shells inwards, furniture
@@ -639,7 +642,65 @@ def rotunda():
     return m, cam
 
 
+def vault_hall():
+    """A barrel-vaulted nave (6 x 12 m, walls 3 m, semicircular vault to 6 m) lit by three window-like
+    emitters on one long wall, with ten finely tessellated columns carrying capitals, a sphere on a
+    pedestal and a torus: about 40k triangles, most of them small (as exported meshes are), so that
+    the uniform mesh's matrix is near the size where `auto` leaves it for the hierarchy."""
+    m = room_model((0.45, 0.42, 0.38), wood=False)
+    m.material("stone", Kd=(0.62, 0.60, 0.56))
+    m.material("orange", Kd=(0.70, 0.32, 0.10))
+    m.material("blue", Kd=(0.15, 0.25, 0.60))
+    m.material("window", Kd=(0, 0, 0), Ke=(9.0, 8.6, 7.8))
+    W, L, H, arc = 3.0, 12.0, 3.0, 64  # half width, length, spring height, vault segments
+    oriented_face(m, "floor", "floor", [(-W, 0, 0), (W, 0, 0), (W, 0, L), (-W, 0, L)], (0, 1, 0))
+    # the vault: a half cylinder of radius W about the axis (0, H, z), facing the axis (OBJ vn)
+    def vault(u, v):
+        th = math.pi * u
+        out = (math.cos(th), math.sin(th), 0.0)
+        return (W * out[0], H + W * out[1], L * v), (-out[0], -out[1], 0.0)
+    surface_of_revolution(m, "vault", "ceiling", vault, arc, 24)
+    # end walls: the rectangle below the spring line and the lunette under the arc, conforming to it
+    arc_pts = [(W * math.cos(math.pi * i / arc), H + W * math.sin(math.pi * i / arc)) for i in range(arc + 1)]
+    for z, facing in ((0.0, (0, 0, 1)), (L, (0, 0, -1))):
+        oriented_face(m, "end_walls", "wall", [(-W, 0, z), (W, 0, z), (W, H, z), (-W, H, z)], facing)
+        for i in range(arc):
+            (xa, ya), (xb, yb) = arc_pts[i], arc_pts[i + 1]
+            oriented_face(m, "end_walls", "wall", [(0.0, H, z), (xa, ya, z), (xb, yb, z)], facing)
+    # the long walls; three windows (1.0 x 1.2 m) on the one at x = +W
+    windows = [(2.5, 3.5), (5.5, 6.5), (8.5, 9.5)]
+    y0, y1 = 1.2, 2.4
+    oriented_face(m, "walls", "wall", [(-W, 0, 0), (-W, 0, L), (-W, H, L), (-W, H, 0)], (1, 0, 0))
+    def band(z0, z1, lo, hi, mat):
+        oriented_face(m, "walls", mat, [(W, lo, z0), (W, lo, z1), (W, hi, z1), (W, hi, z0)], (-1, 0, 0))
+    band(0.0, L, 0.0, y0, "wall")
+    band(0.0, L, y1, H, "wall")
+    edges = [0.0] + [z for w in windows for z in w] + [L]
+    for k in range(len(edges) - 1):
+        band(edges[k], edges[k + 1], y0, y1, "window" if k % 2 == 1 else "wall")
+    # ten columns (r 0.18 m, 2.8 m, 128 x 12 facets) under 0.5 m capitals
+    for x in (-1.8, 1.8):
+        for z in (2.0, 4.0, 6.0, 8.0, 10.0):
+            def column(u, v, x=x, z=z):
+                th = 2 * math.pi * u
+                n = (math.cos(th), 0.0, math.sin(th))
+                return (x + 0.18 * n[0], 2.8 * v, z + 0.18 * n[2]), n
+            surface_of_revolution(m, "columns", "stone", column, 128, 12)
+            m.oriented_box("capitals", "stone", (x, 2.8, z), (0.5, 0.2, 0.5), 0.0, omit_bottom=False)
+    # a sphere on a pedestal and a torus on the floor, in the aisle
+    m.oriented_box("pedestal", "stone", (0.3, 0.0, 6.8), (0.6, 0.7, 0.6), 20.0)
+    sphere(m, "sphere", "orange", (0.3, 1.05, 6.8), 0.35, nu=64, nv=32)
+    torus(m, "torus", "blue", (-0.6, 0.1, 4.2), 0.45, 0.1, nu=48, nv=24)
+    m.write(os.path.join(HERE, "vault_hall"), "vault_hall: barrel-vaulted nave, window lights, ten columns, sphere, torus")
+    eye, look = (-1.0, 1.6, 0.7), (0.6, 2.3, 11.0)
+    cam = {"eye": eye, "look_at": look, "up": rolled_up(eye, look, 0.0), "vfov_deg": 70.0}
+    write_toml("vault_hall", "A barrel-vaulted nave (6 x 12 m, vault to 6 m) lit by three window-like emitters on a long "
+               "wall; ten finely\n# tessellated columns with capitals, a sphere on a pedestal, a torus: about 40k "
+               "triangles.", cam)
+    return m, cam
+
+
 if __name__ == "__main__":
-    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda):
+    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda, vault_hall):
         model, _ = make()
         print("%-12s %4d triangles, %d materials" % (make.__name__, model.triangle_count(), len(model.materials)))

@@ -86,7 +86,7 @@ impl Refinement {
 /// elements marked (what the adaptive solve starts from).
 pub fn patch_mesh(scene: &SceneDescription, textures: Arc<SceneTextures>) -> Mesh {
     let mut mesh = Mesh::build_with_textures(scene, scene.radiosity.max_element_edge, textures);
-    mesh.element_buried = crate::burial::buried_elements(&mesh);
+    (mesh.element_buried, mesh.element_eye) = crate::burial::bury(&mesh);
     mesh
 }
 
@@ -94,7 +94,7 @@ pub fn patch_mesh(scene: &SceneDescription, textures: Arc<SceneTextures>) -> Mes
 /// (`subdivide::split`), and the new mesh's buried elements marked.
 pub fn split_level(mesh: &Mesh, split: &[bool], midpoints: &mut EdgeMidpoints) -> Mesh {
     let mut refined = subdivide::split(mesh, split, midpoints);
-    refined.element_buried = crate::burial::buried_elements(&refined);
+    (refined.element_buried, refined.element_eye) = crate::burial::bury(&refined);
     refined
 }
 

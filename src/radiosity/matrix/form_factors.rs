@@ -251,7 +251,7 @@ impl ElementHierarchy {
     ) {
         let e = &mesh.elements;
         let normal = e.normal[i];
-        let eye = e.centre[i] + normal * eye_offset(e.area[i]);
+        let eye = mesh.eye(i) + normal * eye_offset(e.area[i]);
         buffers.begin(hc, HemicubeFrame::new(eye, normal, hemicube_rotation_rad(params, i)));
         let occluder = e.len() as u32;
         for chunk in &self.chunks {
