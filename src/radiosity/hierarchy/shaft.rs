@@ -10,10 +10,11 @@ use crate::accel::Accel;
 use crate::transport::hit::offset_at;
 
 /// Candidate triangles (those whose box overlaps the shaft's box) a shaft test examines before it
-/// gives up and the link's rays are traced. A shaft test costs about as much per candidate as a
-/// ray's triangle tests; past a few dozen candidates (a tessellated object beside the link) the
-/// rays are cheaper.
-pub const MAX_SHAFT_TRIANGLES: usize = 32;
+/// gives up and the link's rays are traced. Past a dozen or so candidates (a tessellated object
+/// beside the link) the rays are cheaper: procedural:16000 took 25.0 CPU-s at 32, about 21 at 16
+/// and 8, 20.0 without shafts; cornell_original the same time at 16 as at 32 and more at 8
+/// (docs/performance.md, 2026-12-02).
+pub const MAX_SHAFT_TRIANGLES: usize = 16;
 
 /// The test's allowance for rounding, in units of `f32::EPSILON` times the largest coordinate
 /// magnitude involved: the rays' ends are computed in f32 (a few ulps off the exact end hulls) and
