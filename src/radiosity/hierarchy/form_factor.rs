@@ -26,10 +26,30 @@ pub fn point_to_polygon(point: Vec3, normal: Vec3, polygon: &[Vec3]) -> f64 {
     if polygon.len() < 3 {
         return 0.0;
     }
+    point_to_source(point, normal, &Source::new(polygon))
+}
+
+/// A source polygon with its Newell normal, computed once for the many receiver points of an
+/// element link (`element_to_element`: 6 or 54 points) rather than once per point.
+pub struct Source<'a> {
+    polygon: &'a [Vec3],
+    newell: DVec3,
+}
+
+impl<'a> Source<'a> {
+    /// `polygon` (at least three vertices, counter-clockwise seen from its front).
+    pub fn new(polygon: &'a [Vec3]) -> Source<'a> {
+        Source { polygon, newell: newell_normal(polygon) }
+    }
+}
+
+/// `point_to_polygon` to a `Source` (the same value, bit for bit).
+fn point_to_source(point: Vec3, normal: Vec3, source: &Source) -> f64 {
+    let polygon = source.polygon;
     let p = point.as_dvec3();
     let n = normal.as_dvec3();
     // One-sided source: its Newell normal must face the point.
-    let source_normal = newell_normal(polygon);
+    let source_normal = source.newell;
     if source_normal.dot(p - polygon[0].as_dvec3()) <= 0.0 {
         return 0.0;
     }
@@ -116,8 +136,9 @@ pub fn element_to_element(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &
     let mut q3 = 0.0;
     let mut lo = f64::INFINITY;
     let mut hi = 0.0f64;
+    let polygon = Source::new(source);
     for (k, x) in quadrature_points(receiver).into_iter().chain(receiver.iter().copied()).enumerate() {
-        let f = point_to_polygon(x, receiver_normal, source);
+        let f = point_to_source(x, receiver_normal, &polygon);
         lo = lo.min(f);
         hi = hi.max(f);
         if k < 3 {
@@ -139,7 +160,11 @@ pub fn element_to_element(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &
 /// (`links::member_pair_form_factor`, `gather::ArrivalScales`), whose ends are far apart next to
 /// their size, so the near rule's 48 points are not needed.
 pub fn triangle_to_polygon(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3]) -> f64 {
-    quadrature_points(receiver).into_iter().map(|x| point_to_polygon(x, receiver_normal, source)).sum::<f64>() / 3.0
+    if source.len() < 3 {
+        return 0.0;
+    }
+    let polygon = Source::new(source);
+    quadrature_points(receiver).into_iter().map(|x| point_to_source(x, receiver_normal, &polygon)).sum::<f64>() / 3.0
 }
 
 /// The receiver quadrature for element pairs that are near each other (centre distance below 1.5 ×
@@ -163,10 +188,11 @@ fn near_quadrature(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 
         }
         count *= 4;
     }
+    let polygon = Source::new(source);
     let mut sum = 0.0;
     for t in &tris {
         for x in quadrature_points(t) {
-            sum += point_to_polygon(x, receiver_normal, source);
+            sum += point_to_source(x, receiver_normal, &polygon);
         }
     }
     sum / 48.0
