@@ -131,8 +131,20 @@ pub fn quadrature_points(triangle: &[Vec3; 3]) -> [Vec3; 3] {
 /// |Q₃ − corner mean|, was tried and rejected: it accepts coarse links between adjacent faces whose
 /// quadrature error is large, and the furnace's leaf form-factor sums drifted by 9%.)
 ///
-/// Returns (Q₃, ΔF).
+/// Returns (Q₃, ΔF); Q₃ is `near_quadrature` for near pairs (see `element_six_points`).
 pub fn element_to_element(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 3]) -> (f64, f64) {
+    let (q3, error, near) = element_six_points(receiver, receiver_normal, source);
+    if near {
+        return (near_quadrature(receiver, receiver_normal, source), error);
+    }
+    (q3, error)
+}
+
+/// The six-point part of `element_to_element`: (Q₃ of the three-point rule, ΔF over the six
+/// points, whether the pair is near: centre distance below 1.5 × the sum of the bounding radii).
+/// For a near pair the form factor is `near_quadrature`'s, which `links::estimate` skips for a link
+/// that its error ΔF alone already sends to be split.
+pub fn element_six_points(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 3]) -> (f64, f64, bool) {
     let mut q3 = 0.0;
     let mut lo = f64::INFINITY;
     let mut hi = 0.0f64;
@@ -148,10 +160,8 @@ pub fn element_to_element(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &
     let centre = |t: &[Vec3; 3]| (t[0] + t[1] + t[2]) / 3.0;
     let radius = |t: &[Vec3; 3], c: Vec3| t.iter().map(|p| p.distance(c)).fold(0.0f32, f32::max);
     let (cr, cs) = (centre(receiver), centre(source));
-    if cr.distance(cs) < 1.5 * (radius(receiver, cr) + radius(source, cs)) {
-        return (near_quadrature(receiver, receiver_normal, source), hi - lo);
-    }
-    (q3 / 3.0, hi - lo)
+    let near = cr.distance(cs) < 1.5 * (radius(receiver, cr) + radius(source, cs));
+    (q3 / 3.0, hi - lo, near)
 }
 
 /// The unoccluded form factor from a receiver triangle to a source polygon by the receiver's
@@ -173,7 +183,7 @@ pub fn triangle_to_polygon(receiver: &[Vec3; 3], receiver_normal: Vec3, source: 
 /// elements share an edge the integrand is log-singular and the plain rule's relative error does not
 /// shrink with the elements' size (27.5% on the worst analytic case at every scale); this rule's is
 /// 0.43% there (`tests/hierarchy.rs`), whatever the size, so refinement need not chase it.
-fn near_quadrature(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 3]) -> f64 {
+pub fn near_quadrature(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 3]) -> f64 {
     let mut tris = [[Vec3::ZERO; 3]; 16];
     tris[0] = *receiver;
     let mut count = 1;

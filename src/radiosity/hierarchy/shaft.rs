@@ -104,17 +104,26 @@ pub fn shaft_clear(accel: &Accel, a: &EndHull, b: &EndHull) -> bool {
     let slack = SLACK_EPSILONS * f32::EPSILON as f64 * magnitude;
     let axis = b.centroid() - a.centroid();
     let grow = DVec3::splat(2.0 * slack);
+    // The candidates are collected before any is tested: a crowded shaft (a tessellated surface
+    // beside the link) is then given up after the box query alone, not after up to
+    // `MAX_SHAFT_TRIANGLES` triangle tests. The verdict is the same either way.
+    let mut candidates = [[Vec3::ZERO; 3]; MAX_SHAFT_TRIANGLES];
     let mut seen = 0usize;
-    accel.visit_triangles_in_box((lo - grow).as_vec3(), (hi + grow).as_vec3(), |triangle| {
-        seen += 1;
-        if seen > MAX_SHAFT_TRIANGLES {
+    let complete = accel.visit_triangles_in_box((lo - grow).as_vec3(), (hi + grow).as_vec3(), |triangle| {
+        if seen == MAX_SHAFT_TRIANGLES {
             return false;
         }
-        let t = triangle.map(|p| p.as_dvec3());
-        let t_magnitude = t.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
-        let slack = slack.max(SLACK_EPSILONS * f32::EPSILON as f64 * t_magnitude);
-        triangle_outside_shaft(&t, a, b, axis, slack)
-    })
+        candidates[seen] = *triangle;
+        seen += 1;
+        true
+    });
+    complete
+        && candidates[..seen].iter().all(|triangle| {
+            let t = triangle.map(|p| p.as_dvec3());
+            let t_magnitude = t.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+            let slack = slack.max(SLACK_EPSILONS * f32::EPSILON as f64 * t_magnitude);
+            triangle_outside_shaft(&t, a, b, axis, slack)
+        })
 }
 
 /// Whether triangle `t` cannot block a segment of the convex hull of `a` and `b` (the shaft) by

@@ -335,6 +335,7 @@ pub fn estimate_shared(
     source: usize,
     spread_cap: f32,
     threshold_w: f64,
+    min_element_area: f32,
 ) -> Option<(f32, f32)> {
     if let Some(shared) = shared.filter(|s| !s.known.is_empty()) {
         let pending = is_near(nodes, receiver, source)
@@ -348,7 +349,7 @@ pub fn estimate_shared(
             shared.misses.fetch_add(1, Ordering::Relaxed);
         }
     }
-    estimate(nodes, ctx, receiver, source, spread_cap, threshold_w)
+    estimate(nodes, ctx, receiver, source, spread_cap, threshold_w, min_element_area)
 }
 
 #[cfg(test)]
