@@ -3,11 +3,12 @@
 
 use std::time::Duration;
 
-use glam::{Vec3, Vec3A};
+use glam::{UVec2, Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
     cwbvh::{builder::build_cwbvh, CwBvh},
     ray::{Ray as BvhRay, RayHit},
+    traverse,
     triangle::Triangle,
     Boundable, BvhBuildParams,
 };
@@ -156,6 +157,30 @@ impl Accel {
                 None => f32::INFINITY,
             }
         })
+    }
+}
+
+impl Accel {
+    /// Calls `visit` with the corners of every triangle whose box in the hierarchy (padded, see
+    /// `BOX_PADDING`) overlaps the box [`lo`, `hi`], and possibly of a few more (the CWBVH's child
+    /// boxes are quantized outwards), in no particular order, until `visit` returns false. Returns
+    /// false when `visit` stopped it, true when every such triangle was visited. A superset query:
+    /// no triangle that meets the box is left out, so a caller may conclude from the triangles
+    /// visited that nothing else lies in the box.
+    pub fn visit_triangles_in_box(&self, lo: Vec3, hi: Vec3, mut visit: impl FnMut(&[Vec3; 3]) -> bool) -> bool {
+        if self.is_empty() {
+            return true;
+        }
+        let query = Aabb::new(Vec3A::from(lo), Vec3A::from(hi));
+        let mut stopped = false;
+        let mut state = self.bvh.new_traversal(Vec3A::ONE);
+        let mut node;
+        traverse!(self.bvh, node, state, if stopped { 0 } else { node.intersect_aabb(&query, state.oct_inv4) }, {
+            if !stopped && !visit(&self.vertices[state.primitive_id as usize]) {
+                stopped = true;
+            }
+        });
+        !stopped
     }
 }
 

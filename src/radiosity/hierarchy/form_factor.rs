@@ -26,10 +26,30 @@ pub fn point_to_polygon(point: Vec3, normal: Vec3, polygon: &[Vec3]) -> f64 {
     if polygon.len() < 3 {
         return 0.0;
     }
+    point_to_source(point, normal, &Source::new(polygon))
+}
+
+/// A source polygon with its Newell normal, computed once for the many receiver points of an
+/// element link (`element_to_element`: 6 or 54 points) rather than once per point.
+pub struct Source<'a> {
+    polygon: &'a [Vec3],
+    newell: DVec3,
+}
+
+impl<'a> Source<'a> {
+    /// `polygon` (at least three vertices, counter-clockwise seen from its front).
+    pub fn new(polygon: &'a [Vec3]) -> Source<'a> {
+        Source { polygon, newell: newell_normal(polygon) }
+    }
+}
+
+/// `point_to_polygon` to a `Source` (the same value, bit for bit).
+fn point_to_source(point: Vec3, normal: Vec3, source: &Source) -> f64 {
+    let polygon = source.polygon;
     let p = point.as_dvec3();
     let n = normal.as_dvec3();
     // One-sided source: its Newell normal must face the point.
-    let source_normal = newell_normal(polygon);
+    let source_normal = source.newell;
     if source_normal.dot(p - polygon[0].as_dvec3()) <= 0.0 {
         return 0.0;
     }
@@ -111,13 +131,26 @@ pub fn quadrature_points(triangle: &[Vec3; 3]) -> [Vec3; 3] {
 /// |Q₃ − corner mean|, was tried and rejected: it accepts coarse links between adjacent faces whose
 /// quadrature error is large, and the furnace's leaf form-factor sums drifted by 9%.)
 ///
-/// Returns (Q₃, ΔF).
+/// Returns (Q₃, ΔF); Q₃ is `near_quadrature` for near pairs (see `element_six_points`).
 pub fn element_to_element(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 3]) -> (f64, f64) {
+    let (q3, error, near) = element_six_points(receiver, receiver_normal, source);
+    if near {
+        return (near_quadrature(receiver, receiver_normal, source), error);
+    }
+    (q3, error)
+}
+
+/// The six-point part of `element_to_element`: (Q₃ of the three-point rule, ΔF over the six
+/// points, whether the pair is near: centre distance below 1.5 × the sum of the bounding radii).
+/// For a near pair the form factor is `near_quadrature`'s, which `links::estimate` skips for a link
+/// that its error ΔF alone already sends to be split.
+pub fn element_six_points(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 3]) -> (f64, f64, bool) {
     let mut q3 = 0.0;
     let mut lo = f64::INFINITY;
     let mut hi = 0.0f64;
+    let polygon = Source::new(source);
     for (k, x) in quadrature_points(receiver).into_iter().chain(receiver.iter().copied()).enumerate() {
-        let f = point_to_polygon(x, receiver_normal, source);
+        let f = point_to_source(x, receiver_normal, &polygon);
         lo = lo.min(f);
         hi = hi.max(f);
         if k < 3 {
@@ -127,10 +160,8 @@ pub fn element_to_element(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &
     let centre = |t: &[Vec3; 3]| (t[0] + t[1] + t[2]) / 3.0;
     let radius = |t: &[Vec3; 3], c: Vec3| t.iter().map(|p| p.distance(c)).fold(0.0f32, f32::max);
     let (cr, cs) = (centre(receiver), centre(source));
-    if cr.distance(cs) < 1.5 * (radius(receiver, cr) + radius(source, cs)) {
-        return (near_quadrature(receiver, receiver_normal, source), hi - lo);
-    }
-    (q3 / 3.0, hi - lo)
+    let near = cr.distance(cs) < 1.5 * (radius(receiver, cr) + radius(source, cs));
+    (q3 / 3.0, hi - lo, near)
 }
 
 /// The unoccluded form factor from a receiver triangle to a source polygon by the receiver's
@@ -139,7 +170,11 @@ pub fn element_to_element(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &
 /// (`links::member_pair_form_factor`, `gather::ArrivalScales`), whose ends are far apart next to
 /// their size, so the near rule's 48 points are not needed.
 pub fn triangle_to_polygon(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3]) -> f64 {
-    quadrature_points(receiver).into_iter().map(|x| point_to_polygon(x, receiver_normal, source)).sum::<f64>() / 3.0
+    if source.len() < 3 {
+        return 0.0;
+    }
+    let polygon = Source::new(source);
+    quadrature_points(receiver).into_iter().map(|x| point_to_source(x, receiver_normal, &polygon)).sum::<f64>() / 3.0
 }
 
 /// The receiver quadrature for element pairs that are near each other (centre distance below 1.5 ×
@@ -148,7 +183,7 @@ pub fn triangle_to_polygon(receiver: &[Vec3; 3], receiver_normal: Vec3, source: 
 /// elements share an edge the integrand is log-singular and the plain rule's relative error does not
 /// shrink with the elements' size (27.5% on the worst analytic case at every scale); this rule's is
 /// 0.43% there (`tests/hierarchy.rs`), whatever the size, so refinement need not chase it.
-fn near_quadrature(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 3]) -> f64 {
+pub fn near_quadrature(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 3]) -> f64 {
     let mut tris = [[Vec3::ZERO; 3]; 16];
     tris[0] = *receiver;
     let mut count = 1;
@@ -163,10 +198,11 @@ fn near_quadrature(receiver: &[Vec3; 3], receiver_normal: Vec3, source: &[Vec3; 
         }
         count *= 4;
     }
+    let polygon = Source::new(source);
     let mut sum = 0.0;
     for t in &tris {
         for x in quadrature_points(t) {
-            sum += point_to_polygon(x, receiver_normal, source);
+            sum += point_to_source(x, receiver_normal, &polygon);
         }
     }
     sum / 48.0

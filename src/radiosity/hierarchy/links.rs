@@ -2,7 +2,10 @@
 //! it is linked to. Stored by receiver in compressed rows; `estimate` picks the estimator by link type
 //! (see `form_factor` for which one serves which).
 
-use super::form_factor::{cluster_form_factor, cluster_form_factor_bound, element_to_element, triangle_to_polygon};
+use super::form_factor::{
+    cluster_form_factor, cluster_form_factor_bound, element_six_points, element_to_element, near_quadrature,
+    triangle_to_polygon,
+};
 use super::nodes::Nodes;
 use super::visibility::{link_visibility, sampled_form_factor, Visibility, VisibilityContext};
 
@@ -134,6 +137,11 @@ pub fn source_variation_power(nodes: &Nodes, receiver: usize, source: usize, coe
         .filter(|&c| nodes.open_area[c] > 0.0)
         .map(|c| (nodes.exitance_mean[c] - b).abs())
         .fold(0.0, f64::max);
+    if !(spread > 0.0) {
+        // Also when the coefficient is not known (an element link left unestimated because it is
+        // split, `estimate`: NaN).
+        return 0.0;
+    }
     nodes.area[receiver] as f64 * nodes.reflectance_max[receiver] as f64 * coefficient as f64 * spread
 }
 
@@ -182,6 +190,26 @@ pub fn near_split_pending(
     (refinement_error(nodes, &record) > threshold_w).then_some(spread)
 }
 
+/// Whether refinement will split element link (receiver ← source) of spread `spread`, whatever its
+/// form factor: its source's exitance does not vary over its children (`source_variation_power`
+/// 0, always for a leaf, so the decision reads only the spread: `refine::decide`), its error
+/// `link_error_power` is above `threshold_w`, and the receiver can be split (it has children, or
+/// its quarters keep at least `min_element_area`: `refine::choose_split`). Reads the exitance, like
+/// `near_split_pending`.
+pub fn element_split_pending(
+    nodes: &Nodes,
+    receiver: usize,
+    source: usize,
+    spread: f32,
+    threshold_w: f64,
+    min_element_area: f32,
+) -> bool {
+    let receiver_splits = !nodes.is_leaf(receiver) || nodes.area[receiver] * 0.25 >= min_element_area;
+    receiver_splits
+        && source_variation_power(nodes, receiver, source, 1.0) == 0.0
+        && link_error_power(nodes, receiver, source, spread) > threshold_w
+}
+
 /// Whether the point-to-point cluster formula may stand for link (receiver ← source) at all: always
 /// for two elements (their estimator is exact in the source); with a cluster end, only when the ends'
 /// bounding spheres are disjoint and neither sphere crosses an element end's plane. Other links are
@@ -225,17 +253,35 @@ pub fn estimate(
     source: usize,
     spread_cap: f32,
     threshold_w: f64,
+    min_element_area: f32,
 ) -> Option<(f32, f32)> {
     if !nodes.is_cluster[receiver] && !nodes.is_cluster[source] {
-        let (mean, error) =
-            element_to_element(&nodes.corners[receiver], nodes.normal[receiver], &nodes.corners[source]);
-        if !(mean > 0.0 || error > 0.0) {
+        let (corners_r, normal_r, corners_s) =
+            (&nodes.corners[receiver], nodes.normal[receiver], &nodes.corners[source]);
+        let (q3, error, near) = element_six_points(corners_r, normal_r, corners_s);
+        let near_mean = || if near { near_quadrature(corners_r, normal_r, corners_s) } else { q3 };
+        // The mean is needed before the rays only when the six points agree exactly (often all 0).
+        let early_mean = (!(error > 0.0)).then(near_mean);
+        if early_mean.is_some_and(|mean| !(mean > 0.0)) {
             return None;
         }
         let v = link_visibility(ctx, nodes, receiver, source).visible as f64;
         if v == 0.0 {
             return None;
         }
+        // The spread below is known without the mean when V = 1 (ΔF = error exactly) or when its
+        // lower bound error·V already reaches the cap (the mean only adds to it, f32 rounding is
+        // monotone). When it alone sends the link to be split, the 48-point rule is not computed:
+        // F is left unestimated (NaN, as for near links about to split; a link kept after all,
+        // over the memory budget, gets it from `near_form_factor`).
+        let capped = (error * v) as f32 >= spread_cap;
+        if near && early_mean.is_none() && (v == 1.0 || capped) {
+            let spread = if capped { spread_cap } else { (error as f32).min(spread_cap) };
+            if element_split_pending(nodes, receiver, source, spread, threshold_w, min_element_area) {
+                return Some((f32::NAN, spread));
+            }
+        }
+        let mean = early_mean.unwrap_or_else(near_mean);
         let f = mean * v;
         let spread = error * v + 2.0 * mean * v.min(1.0 - v);
         return Some((f as f32, (spread as f32).min(spread_cap)));

@@ -30,6 +30,7 @@ pub mod nodes;
 pub mod part_file;
 pub mod procedural;
 pub mod refine;
+pub mod shaft;
 pub mod shards;
 pub mod solve;
 pub mod solved_state;

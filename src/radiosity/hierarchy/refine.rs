@@ -216,7 +216,8 @@ pub fn refine_logged(
             let compute = |i: usize| {
                 let p = &next[i];
                 let (r, s) = (p.receiver as usize, p.source as usize);
-                estimate_shared(shared, &paths, nodes, ctx, r, s, p.spread_cap, settings.allowed_error_w(nodes.area[r]))
+                let threshold_w = settings.allowed_error_w(nodes.area[r]);
+                estimate_shared(shared, &paths, nodes, ctx, r, s, p.spread_cap, threshold_w, settings.min_element_area)
             };
             estimate_links(EstimateKind::Link, &pairs, &compute, hooks)?
         };

@@ -324,7 +324,8 @@ pub fn estimate_key(
 
 /// `links::estimate` of link (receiver ← source), taken from the parts when they hold its key
 /// (`paths`: every node's `tree_path`, or empty without `shared`). A near link about to be split is
-/// computed (no rays; its value depends on the pass).
+/// computed (no rays; its value depends on the pass), and so is an element link a part left
+/// unestimated.
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_shared(
     shared: Option<&SharedEstimates>,
@@ -335,20 +336,26 @@ pub fn estimate_shared(
     source: usize,
     spread_cap: f32,
     threshold_w: f64,
+    min_element_area: f32,
 ) -> Option<(f32, f32)> {
     if let Some(shared) = shared.filter(|s| !s.known.is_empty()) {
         let pending = is_near(nodes, receiver, source)
             && near_split_pending(nodes, receiver, source, spread_cap, threshold_w).is_some();
         let known = || estimate_key(nodes, paths, receiver, source, spread_cap).and_then(|k| shared.known.get(&k));
         if !pending {
-            if let Some(value) = known() {
+            // An element link a part left unestimated (F NaN: split there, `links::estimate`) is
+            // computed: whether it splits reads the pass's exitance.
+            let unestimated_element = |value: &Option<(f32, f32)>| {
+                value.is_some_and(|(f, _)| f.is_nan()) && !nodes.is_cluster[receiver] && !nodes.is_cluster[source]
+            };
+            if let Some(value) = known().filter(|value| !unestimated_element(value)) {
                 shared.hits.fetch_add(1, Ordering::Relaxed);
                 return *value;
             }
             shared.misses.fetch_add(1, Ordering::Relaxed);
         }
     }
-    estimate(nodes, ctx, receiver, source, spread_cap, threshold_w)
+    estimate(nodes, ctx, receiver, source, spread_cap, threshold_w, min_element_area)
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@ use glam::Vec3;
 
 use super::form_factor::point_to_polygon;
 use super::nodes::Nodes;
+use super::shaft::{shaft_clear, EndHull, MAX_SHAFT_TRIANGLES, SLACK_EPSILONS};
 use super::tree_path::path_hash;
 use crate::accel::Accel;
 use crate::rng::splitmix64;
@@ -57,6 +58,14 @@ pub struct Visibility {
 /// seed 0 against the 0.00106 target, its error dominated by visibility noise (docs/accuracy.md).
 pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, source: usize) -> Visibility {
     let n = ctx.rays.max(1);
+    // Two elements wholly in front of each other: every sample pair faces, so all rays would be
+    // traced and, when the shaft is clear, all would pass: V = n/n = 1 without sampling.
+    let mut clear = None;
+    if elements_face_each_other(nodes, receiver, source)
+        && *clear.get_or_insert_with(|| link_shaft_clear(ctx, nodes, receiver, source))
+    {
+        return Visibility { visible: 1.0 };
+    }
     let (at_receiver, at_source) = EndPattern::pair(link_seed(ctx.seed, nodes, receiver, source));
     let (mut visible, mut facing) = (0u32, 0u32);
     for attempt in 0..4 * n {
@@ -70,13 +79,70 @@ pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, 
             continue;
         }
         facing += 1;
-        let xo = leave_surface(x, nx, ctx.offset);
-        let yo = leave_surface(y, ny, ctx.offset);
-        if !ctx.accel.occluded(xo, yo - xo, 1.0) {
+        if unoccluded(ctx, nodes, receiver, source, &mut clear, (x, nx), (y, ny)) {
             visible += 1;
         }
     }
     Visibility { visible: if facing == 0 { 1.0 } else { visible as f32 / facing as f32 } }
+}
+
+/// Whether the segment between `x` and `y` (points with their unit normals on link (receiver ←
+/// source)'s ends), each end moved `ctx.offset` off its surface (`leave_surface`), is unoccluded.
+/// The link's shaft (`shaft::shaft_clear`, computed at the first call and kept in `clear`) answers
+/// for all its rays when it is clear: then no ray is traced, and the answer is the one the ray would
+/// have given (the shaft test is conservative to within the rays' own rounding).
+fn unoccluded(
+    ctx: &VisibilityContext,
+    nodes: &Nodes,
+    receiver: usize,
+    source: usize,
+    clear: &mut Option<bool>,
+    (x, nx): (Vec3, Vec3),
+    (y, ny): (Vec3, Vec3),
+) -> bool {
+    let shaft = *clear.get_or_insert_with(|| link_shaft_clear(ctx, nodes, receiver, source));
+    if shaft {
+        return true;
+    }
+    let xo = leave_surface(x, nx, ctx.offset);
+    let yo = leave_surface(y, ny, ctx.offset);
+    !ctx.accel.occluded(xo, yo - xo, 1.0)
+}
+
+/// `shaft::shaft_clear` between the ray-end hulls of link (receiver ← source); false without a
+/// box query when an end is a cluster of more than `shaft::MAX_SHAFT_TRIANGLES` input triangles:
+/// its own members lie in the shaft's box, so the query would exceed its candidate cap anyway (the
+/// clusters of a tessellated object, whose shafts paid the query for nothing: procedural:16000
+/// +19% CPU-s in session 14).
+fn link_shaft_clear(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, source: usize) -> bool {
+    if [receiver, source]
+        .iter()
+        .any(|&end| nodes.is_cluster[end] && !nodes.member_count_within(end, MAX_SHAFT_TRIANGLES))
+    {
+        return false;
+    }
+    let ends = [receiver, source].map(|node| EndHull::of_node(nodes, node, ctx.offset));
+    shaft_clear(ctx.accel, &ends[0], &ends[1])
+}
+
+/// Whether elements `a` and `b` (not clusters) lie wholly in front of each other, so that every
+/// pair of their points passes `link_visibility`'s facing test (n_x·(y − x) > 0 and n_y·(x − y) > 0,
+/// evaluated in f32): each one's corners are in front of the other's plane by more than
+/// `shaft::SLACK_EPSILONS` ulps of the largest coordinate, which covers the rounding of the sample
+/// points and of the test.
+pub fn elements_face_each_other(nodes: &Nodes, a: usize, b: usize) -> bool {
+    if nodes.is_cluster[a] || nodes.is_cluster[b] {
+        return false;
+    }
+    let (ca, cb) = (nodes.corners[a].map(|p| p.as_dvec3()), nodes.corners[b].map(|p| p.as_dvec3()));
+    let magnitude = ca.iter().chain(&cb).fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    let margin = SLACK_EPSILONS * f32::EPSILON as f64 * magnitude;
+    let in_front = |corners: &[glam::DVec3; 3], normal: Vec3, others: &[glam::DVec3; 3]| {
+        let n = normal.as_dvec3();
+        let plane = corners.iter().map(|p| n.dot(*p)).fold(f64::NEG_INFINITY, f64::max);
+        others.iter().all(|p| n.dot(*p) > plane + margin)
+    };
+    in_front(&ca, nodes.normal[a], &cb) && in_front(&cb, nodes.normal[b], &ca)
 }
 
 /// The 2-D points one end of a link is sampled with: point k is point σ(k) of the Owen-scrambled
@@ -185,6 +251,7 @@ pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usi
     // Σ F_k V_k and Σ F_k over samples with a visibility ray; Σ F_k over samples without one.
     let (mut seen, mut tested, mut untested) = (0.0f64, 0.0f64, 0.0f64);
     let mut facing = 0u32;
+    let mut clear = None;
     for k in 0..n {
         let (x, nx) = sample_point(nodes, receiver, at_receiver.point(k));
         let (t, [u, v]) = sample_element(nodes, source, at_source.point(k));
@@ -205,9 +272,7 @@ pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usi
             continue;
         }
         tested += f;
-        let xo = leave_surface(x, nx, ctx.offset);
-        let yo = leave_surface(y, ny, ctx.offset);
-        if !ctx.accel.occluded(xo, yo - xo, 1.0) {
+        if unoccluded(ctx, nodes, receiver, source, &mut clear, (x, nx), (y, ny)) {
             seen += f;
         }
     }
