@@ -137,25 +137,6 @@ pub fn source_variation_power(nodes: &Nodes, receiver: usize, source: usize, coe
     nodes.area[receiver] as f64 * nodes.reflectance_max[receiver] as f64 * coefficient as f64 * spread
 }
 
-/// The error of reading the source's mean exitance when its leaves' exitance varies (W):
-///
-/// ε_B = A_R · ρ_R · F_RS · max(B_high − B_S, B_S − B_low),
-///
-/// [B_low, B_high] the range of the source's open leaves' exitance (`Nodes::exitance_low`), so a
-/// bright or dark patch deep below the source counts, not only its children's means. The link
-/// transfers F_RS·B_S where the exact transfer is Σ_k F_k B_k over the source's leaves k; the two
-/// differ by Σ_k (F_k − F_RS A_k/A_S)(B_k − B_S) ≤ F_RS · max_k |B_k − B_S| (Σ F_k = F_RS). The
-/// parts of a source its receivers see best are not its mean: a floor sees the foot of a wall best.
-/// 0 for a leaf source and a receiver with no open area.
-pub fn source_range_power(nodes: &Nodes, receiver: usize, source: usize, form_factor: f32) -> f64 {
-    if !(nodes.open_area[receiver] > 0.0) || !(form_factor > 0.0) {
-        return 0.0;
-    }
-    let b = nodes.exitance_mean[source];
-    let deviation = (nodes.exitance_high[source] - b).max(b - nodes.exitance_low[source]).max(0.0);
-    nodes.area[receiver] as f64 * nodes.reflectance_max[receiver] as f64 * form_factor as f64 * deviation
-}
-
 /// Whether a link is *near*: a cluster's self-link, or a link with a cluster end that is not
 /// `admissible` for the cluster formula. Near links are estimated by sampling
 /// (`visibility::sampled_form_factor`) and their error is the bound `near_spread`.

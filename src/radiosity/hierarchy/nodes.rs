@@ -19,7 +19,7 @@ pub const NODE_BYTES: usize = std::mem::size_of::<bool>()
     + 4 * std::mem::size_of::<Vec3>()
     + 4 * std::mem::size_of::<f32>()
     + 2 * std::mem::size_of::<DVec3>()
-    + 3 * std::mem::size_of::<f64>();
+    + std::mem::size_of::<f64>();
 
 /// All nodes of the hierarchy. Children of a node are contiguous: `first_child .. first_child +
 /// child_count`. Clusters have two children (clusters or input triangles); a subdivided element has
@@ -62,14 +62,6 @@ pub struct Nodes {
     pub gathered: Vec<DVec3>,
     /// Mean channel of `exitance`, the B of the error estimate (linear, so pulling commutes with it).
     pub exitance_mean: Vec<f64>,
-    /// Smallest `exitance_mean` of the leaves below the node that have open area (of all its leaves
-    /// when none has): a leaf's own. With `exitance_high` the range the source-variation term of
-    /// refinement reads (`links::source_variation_power`): a small bright or dark patch deep below a
-    /// large source shows in it, where the children's means barely move. Kept up to date wherever
-    /// exitance is pulled (`pull_exitance_range`).
-    pub exitance_low: Vec<f64>,
-    /// Largest `exitance_mean` of the same leaves (see `exitance_low`).
-    pub exitance_high: Vec<f64>,
     /// A textured scene's texture means (`texels`): pieces made by `subdivide` take the means over
     /// their own uv image. `None`: pieces inherit their parent's reflectance and emission.
     pub texels: Option<Arc<InputTexels>>,
@@ -255,8 +247,6 @@ impl Nodes {
         self.exitance.push(n.emission.as_dvec3());
         self.gathered.push(DVec3::ZERO);
         self.exitance_mean.push(mean_channel(n.emission.as_dvec3()));
-        self.exitance_low.push(mean_channel(n.emission.as_dvec3()));
-        self.exitance_high.push(mean_channel(n.emission.as_dvec3()));
         index
     }
 
@@ -290,7 +280,6 @@ impl Nodes {
         self.reflectance_max[cluster] = rho_max * inv;
         self.exitance[cluster] = exitance * inv as f64;
         self.exitance_mean[cluster] = mean_channel(self.exitance[cluster]);
-        self.pull_exitance_range(cluster);
         self.centre[cluster] = (lo + hi) * 0.5;
         self.radius[cluster] = (hi - lo).length() * 0.5;
     }
@@ -303,37 +292,6 @@ impl Nodes {
         } else {
             let c = self.corners[node];
             (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]))
-        }
-    }
-
-    /// Sets `node`'s leaf-exitance range (`exitance_low`, `exitance_high`) from its children's, which
-    /// must be up to date; a leaf's becomes [B, B], B its `exitance_mean`:
-    ///
-    /// B_low(n) = min_c B_low(c),  B_high(n) = max_c B_high(c)
-    ///
-    /// over the children c with open area (all children when none has), like `gather::pulled`'s mean.
-    pub fn pull_exitance_range(&mut self, node: usize) {
-        if self.is_leaf(node) {
-            self.exitance_low[node] = self.exitance_mean[node];
-            self.exitance_high[node] = self.exitance_mean[node];
-            return;
-        }
-        let any_open = self.children(node).any(|c| self.open_area[c] > 0.0);
-        let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
-        for c in self.children(node).filter(|&c| !any_open || self.open_area[c] > 0.0) {
-            low = low.min(self.exitance_low[c]);
-            high = high.max(self.exitance_high[c]);
-        }
-        self.exitance_low[node] = low;
-        self.exitance_high[node] = high;
-    }
-
-    /// Sets every node's leaf-exitance range from the leaves' `exitance_mean` (children come after
-    /// their parent, so one pass in reverse index order suffices): after exitance was restored from
-    /// elsewhere (`solved_state`).
-    pub fn pull_exitance_ranges(&mut self) {
-        for n in (0..self.len()).rev() {
-            self.pull_exitance_range(n);
         }
     }
 
@@ -360,8 +318,6 @@ impl Nodes {
             self.normal[child] = self.normal[node];
             self.exitance[child] = exitance;
             self.exitance_mean[child] = mean_channel(exitance);
-            self.exitance_low[child] = self.exitance_mean[child];
-            self.exitance_high[child] = self.exitance_mean[child];
             self.parent[child] = node as u32;
         }
         self.first_child[node] = first;

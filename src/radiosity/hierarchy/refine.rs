@@ -8,8 +8,8 @@ use rayon::prelude::*;
 
 use super::estimates::{estimate_links, EstimateHooks, EstimateKind, EstimateLog, Stopped};
 use super::links::{
-    link_error_power, near_form_factor, near_push_spread, refinement_error, source_range_power, source_variation_power,
-    LinkRecord, Links, LINK_BYTES,
+    link_error_power, near_form_factor, near_push_spread, refinement_error, source_variation_power, LinkRecord, Links,
+    LINK_BYTES,
 };
 use super::nodes::{Nodes, NODE_BYTES};
 use super::shards::estimate_shared;
@@ -273,23 +273,6 @@ enum Decision {
 fn decide(nodes: &Nodes, link: &LinkRecord, settings: &RefineSettings) -> Decision {
     let (r, s) = (link.receiver as usize, link.source as usize);
     if !(refinement_error(nodes, link) > settings.allowed_error_w(nodes.area[r])) {
-        static MODE: std::sync::OnceLock<u32> = std::sync::OnceLock::new();
-        let mode = *MODE.get_or_init(|| std::env::var("HDARK_VAR").ok().and_then(|v| v.parse().ok()).unwrap_or(0));
-        let eligible = match mode {
-            3 => true,
-            4 => !nodes.is_cluster[s],
-            5 | 6 => !nodes.is_cluster[s] && !nodes.is_cluster[r],
-            _ => false,
-        };
-        static K: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
-        let k = *K.get_or_init(|| std::env::var("HDARK_K").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0));
-        if eligible
-            && r != s
-            && !nodes.is_leaf(s)
-            && source_range_power(nodes, r, s, link.form_factor) > k * settings.allowed_error_w(nodes.area[r])
-        {
-            return Decision::Split(Split::Source);
-        }
         return Decision::Keep;
     }
     if r == s {

@@ -39,7 +39,6 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, scales: &ArrivalScales, root: usi
             let b = pulled(nodes, n, &nodes.exitance);
             nodes.exitance[n] = b;
             nodes.exitance_mean[n] = mean_channel(nodes.exitance[n]);
-            nodes.pull_exitance_range(n);
             continue;
         }
         arrivals.truncate(down.hi);
@@ -60,7 +59,6 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, scales: &ArrivalScales, root: usi
             );
             nodes.exitance[n] = new;
             nodes.exitance_mean[n] = mean_channel(new);
-            nodes.pull_exitance_range(n);
             change.max_change = change.max_change.max((new - old).abs().max_element());
             change.max_exitance = change.max_exitance.max(new.max_element());
         } else {
@@ -127,6 +125,5 @@ pub fn reset_to_emission(nodes: &mut Nodes, root: usize) {
         let b = if nodes.is_leaf(n) { nodes.emission[n].as_dvec3() } else { pulled(nodes, n, &nodes.exitance) };
         nodes.exitance[n] = b;
         nodes.exitance_mean[n] = mean_channel(b);
-        nodes.pull_exitance_range(n);
     }
 }

@@ -101,7 +101,6 @@ impl SolvedState {
         nodes.exitance.clone_from(&self.exitance);
         nodes.gathered.clone_from(&self.gathered);
         nodes.exitance_mean.clone_from(&self.exitance_mean);
-        nodes.pull_exitance_ranges();
         stats.refinement_passes = self.pass;
         stats.refinement_rounds = self.refinement_rounds;
         stats.sweeps = self.sweeps;
