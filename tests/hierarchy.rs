@@ -1058,3 +1058,36 @@ fn a_near_link_reaches_each_member_by_its_exact_form_factor() {
         .fold(0.0, f64::max);
     assert!(worst > 0.3, "the arrival's worst error {worst} no longer shows what this test guards against");
 }
+
+/// A cluster's bounding sphere holds every corner of its members (input triangles) and is the sphere
+/// of their exact box: its radius is half the box's diagonal, its centre the box's centre, so it does
+/// not grow with the depth of the tree (it boxed its children's spheres until session 15: up to √3×
+/// per level). Checked on every cluster of the rotunda (2,077). Tolerance: f32 rounding, 1e-5 of the
+/// radius.
+#[test]
+fn cluster_bounds_hold_their_members_and_are_their_boxs_sphere() {
+    let scene = load_scene("rooms/rotunda.toml");
+    let (nodes, _root, _inputs, _) = clusters::build(&scene).unwrap();
+    let mut members = Vec::new();
+    let mut checked = 0;
+    for c in (0..nodes.len()).filter(|&n| nodes.is_cluster[n]) {
+        nodes.members(c, &mut members);
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for &m in &members {
+            for p in nodes.corners[m] {
+                lo = lo.min(p);
+                hi = hi.max(p);
+                let d = p.distance(nodes.centre[c]);
+                assert!(d <= nodes.radius[c] * (1.0 + 1e-5), "cluster {c}: corner at {d} > radius {}", nodes.radius[c]);
+            }
+        }
+        let box_radius = (hi - lo).length() * 0.5;
+        assert!(
+            (nodes.radius[c] - box_radius).abs() <= 1e-5 * box_radius,
+            "cluster {c}: {} vs {box_radius}",
+            nodes.radius[c]
+        );
+        checked += 1;
+    }
+    assert!(checked > 1000, "{checked} clusters");
+}

@@ -210,16 +210,25 @@ pub fn element_split_pending(
         && link_error_power(nodes, receiver, source, spread) > threshold_w
 }
 
+/// How far apart (in sums of the ends' radii) a link with a cluster end must be to be far.
+///
+/// Until session 15 a cluster's sphere boxed its children's spheres, growing up to √3× per level, so
+/// "disjoint spheres" meant far apart; with the members' exact box (`Nodes::set_cluster_children`)
+/// disjointness alone handed close pairs to the far estimators (rotunda 0.00456 → 0.00444 / 0.00420 →
+/// 0.00635, gap_room 0.0111 → 0.0197). Measured on the tight bounds (session 15, docs/accuracy.md):
+/// 2 and 4 give the same rotunda and Cornell figures, so 2.
+pub const FAR_DISTANCE_FACTOR: f32 = 2.0;
+
 /// Whether the point-to-point cluster formula may stand for link (receiver ← source) at all: always
-/// for two elements (their estimator is exact in the source); with a cluster end, only when the ends'
-/// bounding spheres are disjoint and neither sphere crosses an element end's plane. Other links are
-/// near (`is_near`).
+/// for two elements (their estimator is exact in the source); with a cluster end, only when the
+/// centres are more than `FAR_DISTANCE_FACTOR` × the sum of the radii apart and neither sphere crosses
+/// an element end's plane. Other links are near (`is_near`).
 pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
     if !nodes.is_cluster[receiver] && !nodes.is_cluster[source] {
         return true;
     }
     let d = nodes.centre[receiver].distance(nodes.centre[source]);
-    if !(d > nodes.radius[receiver] + nodes.radius[source]) {
+    if !(d > FAR_DISTANCE_FACTOR * (nodes.radius[receiver] + nodes.radius[source])) {
         return false;
     }
     let straddles = |element: usize, other: usize| {
