@@ -163,15 +163,10 @@ pub fn triangle_outside_shaft(t: &[DVec3; 3], a: &EndHull, b: &EndHull, axis: DV
         return true;
     }
     let separated = |m: DVec3| {
-        let len = m.length();
-        if !(len > 0.0) || !len.is_finite() {
+        let Some(m) = unit_axis(m) else {
             return false;
-        }
-        let m = m / len;
-        let (tlo, thi) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
-            let h = m.dot(*q);
-            (lo.min(h), hi.max(h))
-        });
+        };
+        let (tlo, thi) = projected_range(t, m);
         let (mut above, mut below) = (true, true);
         for &p in a.points().iter().chain(b.points()) {
             let h = m.dot(p);
@@ -231,20 +226,26 @@ fn crossing_outside_triangle(t: &[DVec3; 3], n: DVec3, up: &EndHull, down: &EndH
     let v = n.cross(u);
     let axes = [n.cross(t[1] - t[0]), n.cross(t[2] - t[1]), n.cross(t[0] - t[2]), u, v, u + v, u - v];
     axes.iter().any(|&m| {
-        let len = m.length();
-        if !(len > 0.0) || !len.is_finite() {
+        let Some(m) = unit_axis(m) else {
             return false;
-        }
-        let m = m / len;
-        let (tlo, thi) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
-            let h = m.dot(*q);
-            (lo.min(h), hi.max(h))
-        });
-        let (clo, chi) = crossings.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
-            let h = m.dot(*c);
-            (lo.min(h), hi.max(h))
-        });
+        };
+        let (tlo, thi) = projected_range(t, m);
+        let (clo, chi) = projected_range(crossings, m);
         clo > thi + margin || chi < tlo - margin
+    })
+}
+
+/// `m` scaled to unit length, `None` when it has no finite direction (a degenerate axis).
+fn unit_axis(m: DVec3) -> Option<DVec3> {
+    let len = m.length();
+    (len > 0.0 && len.is_finite()).then(|| m / len)
+}
+
+/// The range [min, max] of m·p over `points`.
+fn projected_range(points: &[DVec3], m: DVec3) -> (f64, f64) {
+    points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+        let h = m.dot(*p);
+        (lo.min(h), hi.max(h))
     })
 }
 
