@@ -20,6 +20,7 @@
 
 pub mod clusters;
 pub mod contact;
+pub mod edge_angle;
 pub mod estimates;
 pub mod form_factor;
 pub mod gather;
