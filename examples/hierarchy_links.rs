@@ -151,7 +151,7 @@ fn main() -> ExitCode {
             let reach = scales.receiver(a);
             for (i, k) in links.range(a).enumerate() {
                 let s = links.source[k] as usize;
-                let transfer = nodes.exitance[s] * links.form_factor[k] as f64;
+                let transfer = scales.sent(nodes, links, a, k, &nodes.exitance) * links.form_factor[k] as f64;
                 let share = reach.shares(i).find(|&(m, _)| m == e).map_or(0.0, |(_, c)| c as f64);
                 let (landed, kind) = match arrival_direction(nodes, a, s) {
                     _ if nodes.is_cluster[a] && reach.has_shares(i) => (transfer * share, "member shares"),
@@ -307,7 +307,7 @@ fn object_breakdown(scene: &radray::scene::SceneDescription, objects: &[String])
                         }
                     };
                     let direct = mean(nodes.emission[s].as_dvec3()) * f * gain;
-                    let all = mean(nodes.exitance[s]) * f * gain;
+                    let all = mean(scales.sent(nodes, links, a, k, &nodes.exitance)) * f * gain;
                     landed[kind][0] += open * direct;
                     landed[kind][1] += open * (all - direct);
                 }
@@ -630,7 +630,8 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                     let reach = scales.receiver(a);
                     for (i, k) in links.range(a).enumerate() {
                         let s = links.source[k] as usize;
-                        let t = mean(nodes.exitance[s] - nodes.emission[s].as_dvec3()) * links.form_factor[k] as f64;
+                        let sent = scales.sent(nodes, links, a, k, &nodes.exitance);
+                        let t = mean(sent - nodes.emission[s].as_dvec3()) * links.form_factor[k] as f64;
                         let (gain, kind) = if !nodes.is_cluster[a] {
                             (nodes.open_gain(a), 0)
                         } else if reach.has_shares(i) {

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use super::form_factor::point_to_polygon;
 use super::links::{is_near, Links};
 use super::nodes::Nodes;
+use super::source_weights::{Cursor, SourceWeights};
 use super::visibility::sample_element;
 
 /// Light a cluster receives over one link, from one direction: a member of unit normal n takes the
@@ -109,6 +110,8 @@ pub struct ArrivalScales {
     share_member: Vec<u8>,
     /// Per share: c_i.
     share_factor: Vec<f32>,
+    /// What each link reads from a subdivided element source (`source_weights`).
+    sent: SourceWeights,
 }
 
 // A share's member index is a byte.
@@ -225,7 +228,18 @@ impl ArrivalScales {
         out.members.shrink_to_fit();
         out.share_member.shrink_to_fit();
         out.share_factor.shrink_to_fit();
+        out.sent = SourceWeights::reusing(nodes, links, previous.map(|p| &p.sent));
         out
+    }
+
+    /// What the links of receiver `r` send, asked link by link in order (`source_weights`).
+    pub fn sent_cursor(&self, r: usize) -> Cursor<'_> {
+        self.sent.cursor(r)
+    }
+
+    /// What link k of receiver `r` sends, values being the nodes' exitance (or a part of it).
+    pub fn sent(&self, nodes: &Nodes, links: &Links, r: usize, k: usize, values: &[DVec3]) -> DVec3 {
+        self.sent.sent(nodes, links, r, k, values)
     }
 
     /// The scales of receiver `r`'s links.
@@ -477,9 +491,10 @@ pub fn arrival_direction(nodes: &Nodes, receiver: usize, source: usize) -> Optio
 
 /// Irradiance a receiver gathers over its links, before reflection:
 ///
-/// G_R = Σ_{S linked to R} F_RS · B_S  (W/m², as a mean over R: the returned `mean`),
+/// G_R = Σ_{S linked to R} F_RS · B̂_S  (W/m², as a mean over R: the returned `mean`),
 ///
-/// summed in link order (a fixed order, so the sum is reproducible). For a cluster receiver
+/// B̂_S the exitance the link sends (`source_weights`: its source's pieces weighted by how the
+/// receiver sees them when the source is a subdivided element, else B_S), summed in link order (a fixed order, so the sum is reproducible). For a cluster receiver
 /// (`ArrivalScales`): a link with member shares adds F_RS·B_S·c_i to member i (pushed to `direct`);
 /// a link with a direction ω (`arrival_direction`) and a scale s becomes an `Arrival` of head-on
 /// irradiance w = s·F_RS·B_S appended to `arrivals`; the rest adds to the returned uniform part. For
@@ -500,9 +515,10 @@ pub fn gather_into(
     let (mut uniform, mut mean) = (DVec3::ZERO, DVec3::ZERO);
     let cluster = nodes.is_cluster[receiver];
     let reach = scales.receiver(receiver);
+    let mut sent = scales.sent_cursor(receiver);
     for (i, k) in links.range(receiver).enumerate() {
         let s = links.source[k] as usize;
-        let transfer = exitance[s] * links.form_factor[k] as f64;
+        let transfer = sent.sent(nodes, receiver, s, exitance) * links.form_factor[k] as f64;
         mean += transfer;
         if !cluster {
             uniform += transfer;

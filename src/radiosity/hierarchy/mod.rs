@@ -35,6 +35,7 @@ pub mod shaft;
 pub mod shards;
 pub mod solve;
 pub mod solved_state;
+pub mod source_weights;
 pub mod texels;
 pub mod tree_path;
 pub mod visibility;
