@@ -153,7 +153,15 @@ pub fn build_textured(scene: &SceneDescription, texels: &SurfaceTexels) -> Resul
 }
 
 /// Splits `items` (at least two) at the median of their centroids along the longest axis of the
-/// centroids' bounds; ties are broken by index, so the split is deterministic.
+/// centroids' bounds, without cutting through a group of centroids at the median's coordinate: the
+/// group (often one plane of coplanar triangles, such as one face of a wall) goes whole to the side
+/// that keeps the halves closer to equal, so the split plane falls between distinct coordinates.
+/// Only when every centroid shares the coordinate are ties broken by index. Deterministic.
+///
+/// Why: a plain count median cut the lit face of a two-room wall (all its centroids on z = 4) by
+/// index, and one lit triangle joined the cluster of the whole dark room behind it, whose links then
+/// averaged its exitance into what the dark room received (tests/hierarchy.rs
+/// `light_does_not_leak_through_a_wall_into_a_dark_room`; docs/accuracy.md, session 16).
 fn median_split(centroid: &[Vec3], mut items: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
     let (lo, hi) = items
         .iter()
@@ -167,10 +175,71 @@ fn median_split(centroid: &[Vec3], mut items: Vec<u32>) -> (Vec<u32>, Vec<u32>) 
     } else {
         2
     };
+    let key = |i: u32| centroid[i as usize][axis];
     let mid = items.len() / 2;
-    items.select_nth_unstable_by(mid, |&a, &b| {
-        centroid[a as usize][axis].total_cmp(&centroid[b as usize][axis]).then(a.cmp(&b))
-    });
-    let right = items.split_off(mid);
+    items.select_nth_unstable_by(mid, |&a, &b| key(a).total_cmp(&key(b)).then(a.cmp(&b)));
+    let at = key(items[mid]);
+    // items[..mid] ≤ at ≤ items[mid..]: those equal to `at` are the tie group across the cut.
+    let below = items[..mid].iter().filter(|&&i| key(i).total_cmp(&at).is_lt()).count();
+    let above = items[mid..].iter().filter(|&&i| key(i).total_cmp(&at).is_gt()).count();
+    let n = items.len();
+    // Cut before the group (left = `below` items) or after it (left = n − `above`), whichever is
+    // nearer the median; neither when it would leave a side empty.
+    let candidates = [below, n - above].into_iter().filter(|&k| k > 0 && k < n);
+    let Some(cut) = candidates.min_by_key(|&k| k.abs_diff(mid)) else {
+        let right = items.split_off(mid);
+        return (items, right);
+    };
+    if cut != mid {
+        // Strictly below `at` first, then the group, then strictly above: a stable order by (key, index).
+        items.sort_unstable_by(|&a, &b| key(a).total_cmp(&key(b)).then(a.cmp(&b)));
+    }
+    let right = items.split_off(cut);
     (items, right)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Five centroids on the plane z = 4 (one face of a wall) and four on each side: the count
+    /// median (index 6 of 13) falls inside the plane's group, and the whole group goes to the side
+    /// that keeps the halves nearer equal: the cut before the group (4 | 9) is 2 from the median,
+    /// the one after it (9 | 4) 3.
+    #[test]
+    fn a_median_split_keeps_a_plane_of_equal_coordinates_on_one_side() {
+        let mut centroid = Vec::new();
+        for z in [0.0, 1.0, 2.0, 3.0] {
+            centroid.push(Vec3::new(0.5, 0.5, z));
+        }
+        for k in 0..5 {
+            centroid.push(Vec3::new(k as f32 * 0.1, 0.3, 4.0));
+        }
+        for z in [5.0, 6.0, 7.0, 8.0] {
+            centroid.push(Vec3::new(0.5, 0.5, z));
+        }
+        let (left, right) = median_split(&centroid, (0..centroid.len() as u32).collect());
+        let on_plane = |side: &[u32]| side.iter().filter(|&&i| centroid[i as usize].z == 4.0).count();
+        assert!(on_plane(&left) == 5 || on_plane(&right) == 5, "the plane was cut: {left:?} | {right:?}");
+        assert_eq!((left.len(), right.len()), (4, 9));
+        assert!(left.iter().all(|&i| centroid[i as usize].z <= 4.0));
+        assert!(right.iter().all(|&i| centroid[i as usize].z >= 4.0));
+    }
+
+    /// Without ties the split is the plain count median.
+    #[test]
+    fn a_median_split_without_ties_halves_the_items() {
+        let centroid: Vec<Vec3> = (0..9).map(|k| Vec3::new(k as f32, 0.0, 0.0)).collect();
+        let (left, right) = median_split(&centroid, (0..9).collect());
+        assert_eq!((left.len(), right.len()), (4, 5));
+        assert!(left.iter().all(|&i| i < 4));
+    }
+
+    /// All centroids equal along every axis: ties are broken by index, both sides non-empty.
+    #[test]
+    fn a_median_split_of_coincident_centroids_still_splits() {
+        let centroid = vec![Vec3::ONE; 6];
+        let (left, right) = median_split(&centroid, (0..6).collect());
+        assert_eq!((left.len(), right.len()), (3, 3));
+    }
 }
