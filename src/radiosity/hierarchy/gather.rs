@@ -80,8 +80,12 @@ impl PointSource {
     pub fn of_link(nodes: &Nodes, receiver: usize, source: usize, flat_normal: Vec3) -> PointSource {
         let centre = nodes.centre[source];
         let offset = centre - nodes.centre[receiver];
-        let distance_sq = offset.length_squared();
-        let towards = offset.normalize_or_zero();
+        PointSource::facing(centre, offset.normalize_or_zero(), offset.length_squared(), flat_normal)
+    }
+
+    /// The point source at `centre`, seen from the receiver's centre in unit direction `towards` at
+    /// squared distance `distance_sq`, of flat normal `flat_normal` (zero: not flat).
+    pub fn facing(centre: Vec3, towards: Vec3, distance_sq: f32, flat_normal: Vec3) -> PointSource {
         let facing = (-flat_normal.dot(towards)).max(0.0);
         if facing > 1e-3 {
             PointSource { centre, normal: flat_normal, distance_sq, facing }
@@ -90,21 +94,25 @@ impl PointSource {
         }
     }
 
-    /// g(n, x) (see the type); 0 at the source's centre.
+    /// g(n, x) (see the type); 0 at the source's centre. With o = c_S − x: g = (n·o)·(−n_S·o)·d² /
+    /// (s(ω)·|o|⁴) for a flat source, (n·o)·d² / |o|³ otherwise; a member facing away (n·o ≤ 0), or
+    /// behind a flat source's plane, gets 0 before any square root (the push evaluates this for
+    /// every member and pending arrival at every sweep).
     pub fn weight(&self, normal: Vec3, position: Vec3) -> f64 {
         let offset = self.centre - position;
-        let d2 = offset.length_squared();
-        if !(d2 > 0.0) {
+        let cos_receiver = normal.dot(offset);
+        if !(cos_receiver > 0.0) {
             return 0.0;
         }
-        let omega = offset / d2.sqrt();
-        let cos_receiver = normal.dot(omega).max(0.0) as f64;
-        let emitting = if self.normal == Vec3::ZERO {
-            1.0
-        } else {
-            (-self.normal.dot(omega)).max(0.0) as f64 / self.facing as f64
-        };
-        cos_receiver * emitting * (self.distance_sq as f64 / d2 as f64)
+        let d2 = offset.length_squared() as f64;
+        if self.normal == Vec3::ZERO {
+            return cos_receiver as f64 * self.distance_sq as f64 / (d2 * d2.sqrt());
+        }
+        let cos_source = -self.normal.dot(offset);
+        if !(cos_source > 0.0) {
+            return 0.0;
+        }
+        cos_receiver as f64 * cos_source as f64 * self.distance_sq as f64 / (self.facing as f64 * d2 * d2)
     }
 }
 
@@ -353,9 +361,14 @@ impl ArrivalScales {
             return None;
         }
         let towards = arrival_direction(nodes, receiver, source)?;
-        let point =
-            reach.positional(i).then(|| PointSource::of_link(nodes, receiver, source, self.flat_normal[source]));
+        let point = reach.positional(i).then(|| self.point_source(nodes, receiver, source, towards));
         Some(Arrival { towards, irradiance: DVec3::splat(reach.scale(i) as f64), source: point })
+    }
+
+    /// The `PointSource` of link (receiver ← source) of direction `towards` (`arrival_direction`).
+    fn point_source(&self, nodes: &Nodes, receiver: usize, source: usize, towards: Vec3) -> PointSource {
+        let centre = nodes.centre[source];
+        PointSource::facing(centre, towards, centre.distance_squared(nodes.centre[receiver]), self.flat_normal[source])
     }
 
     /// The scales of receiver `r`'s links.
@@ -682,8 +695,9 @@ pub fn gather_into(
             uniform += transfer;
         } else if reach.has_shares(i) {
             direct.extend(reach.shares(i).map(|(m, c)| (m, transfer * c as f64)));
-        } else if let Some(unit) = scales.unit_arrival(nodes, receiver, i, s) {
-            arrivals.push(Arrival { irradiance: transfer * unit.irradiance, ..unit });
+        } else if let (Some(towards), true) = (arrival_direction(nodes, receiver, s), reach.scale(i) > 0.0) {
+            let source = reach.positional(i).then(|| scales.point_source(nodes, receiver, s, towards));
+            arrivals.push(Arrival { towards, irradiance: transfer * reach.scale(i) as f64, source });
         } else {
             uniform += transfer;
         }
