@@ -38,7 +38,7 @@ use std::process::ExitCode;
 
 use glam::DVec3;
 use radray::radiosity::hierarchy::form_factor::element_to_element;
-use radray::radiosity::hierarchy::gather::{arrival_direction, ArrivalScales};
+use radray::radiosity::hierarchy::gather::ArrivalScales;
 use radray::radiosity::hierarchy::links::is_near;
 use radray::radiosity::hierarchy::{solve_reusing, HierarchyParams};
 
@@ -71,6 +71,8 @@ fn main() -> ExitCode {
         return object_breakdown(&scene, &args[3..]);
     }
     let surface: u32 = args[2].parse().unwrap_or(0);
+    // SURFACE_LAST: report surfaces SURFACE..=SURFACE_LAST (one solve).
+    let last: u32 = std::env::var("SURFACE_LAST").ok().and_then(|v| v.parse().ok()).unwrap_or(surface);
     let depth: u8 = args.get(3).and_then(|d| d.parse().ok()).unwrap_or(2);
     let mut params = radray::radiosity::hierarchical::hierarchy_params(&scene);
     if let (Some(size), Some(rays)) = (args.get(4), args.get(5)) {
@@ -121,7 +123,7 @@ fn main() -> ExitCode {
         );
     };
     for (i, &node) in inputs.node.iter().enumerate() {
-        if inputs.surface[i] != surface || inputs.back[i] {
+        if !(surface..=last).contains(&inputs.surface[i]) || inputs.back[i] {
             continue;
         }
         println!("input triangle {i}: corners {:?}", nodes.corners[node as usize]);
@@ -139,8 +141,57 @@ fn main() -> ExitCode {
         }
     }
     let scales = ArrivalScales::new(nodes, links);
+    if let Ok(pair) = std::env::var("LINK_DEBUG") {
+        let ids: Vec<usize> = pair.split(',').filter_map(|v| v.parse().ok()).collect();
+        let (r, s) = (ids[0], ids[1]);
+        for n in [r, s] {
+            let mut m = Vec::new();
+            nodes.members(n, &mut m);
+            println!(
+                "node {n}: cluster {} area {:.3} centre {:.3} radius {:.3} members {}",
+                nodes.is_cluster[n],
+                nodes.area[n],
+                nodes.centre[n],
+                nodes.radius[n],
+                m.len()
+            );
+            for &x in &m {
+                println!(
+                    "   member {x} input {} area {:.3} centre {:.3} normal {:.2} leaves {}",
+                    nodes.input[x],
+                    nodes.area[x],
+                    nodes.centre[x],
+                    nodes.normal[x],
+                    nodes.is_leaf(x)
+                );
+            }
+        }
+        for k in links.range(r) {
+            if links.source[k] as usize == s {
+                let (mut rs, mut ss) = (Vec::new(), Vec::new());
+                radiosity_leaves(nodes, r, &mut rs);
+                radiosity_leaves(nodes, s, &mut ss);
+                let mut sum = 0.0;
+                for &a in &rs {
+                    for &b in &ss {
+                        sum += nodes.area[a] as f64
+                            * element_to_element(&nodes.corners[a], nodes.normal[a], &nodes.corners[b]).0;
+                    }
+                }
+                println!(
+                    "link F {} spread {} near {} leaves {}x{} unoccluded pair F {}",
+                    links.form_factor[k],
+                    links.spread[k],
+                    is_near(nodes, r, s),
+                    rs.len(),
+                    ss.len(),
+                    sum / nodes.area[r] as f64
+                );
+            }
+        }
+    }
     for (i, &node) in inputs.node.iter().enumerate() {
-        if inputs.surface[i] != surface || inputs.back[i] {
+        if !(surface..=last).contains(&inputs.surface[i]) || inputs.back[i] {
             continue;
         }
         let e = node as usize;
@@ -153,10 +204,10 @@ fn main() -> ExitCode {
                 let s = links.source[k] as usize;
                 let transfer = scales.sent(nodes, links, a, k, &nodes.exitance) * links.form_factor[k] as f64;
                 let share = reach.shares(i).find(|&(m, _)| m == e).map_or(0.0, |(_, c)| c as f64);
-                let (landed, kind) = match arrival_direction(nodes, a, s) {
+                let (landed, kind) = match scales.unit_arrival(nodes, a, i, s) {
                     _ if nodes.is_cluster[a] && reach.has_shares(i) => (transfer * share, "member shares"),
-                    Some(w) if nodes.is_cluster[a] && reach.scale(i) > 0.0 => (
-                        transfer * reach.scale(i) as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
+                    Some(unit) => (
+                        transfer * unit.on_element(nodes.normal[e], nodes.centre[e]).x,
                         if is_near(nodes, a, s) { "near arrival" } else { "far arrival" },
                     ),
                     _ => (transfer * nodes.open_gain(a), if nodes.is_cluster[a] { "uniform" } else { "element" }),
@@ -183,7 +234,14 @@ fn main() -> ExitCode {
         println!(
             "input triangle {i} (node {e}): landed G {total:.4} vs unoccluded exact over the same sources {exact:.4}"
         );
-        for (a, s, kind, landed, exact) in rows.iter().take(16) {
+        for k in KINDS {
+            let (g, x): (f64, f64) =
+                rows.iter().filter(|r| r.2 == k).fold((0.0, 0.0), |(g, x), r| (g + r.3.x, x + r.4.x));
+            print!(" {k}: {g:.4}/{x:.4};");
+        }
+        println!();
+        rows.sort_by(|x, y| (x.3.x - x.4.x).total_cmp(&(y.3.x - y.4.x)));
+        for (a, s, kind, landed, exact) in rows.iter().take(10) {
             println!(
                 "  at node {a} from node {s} ({kind}, source {}): G {:.4} {:.4} {:.4} | exact unoccluded {:.4} {:.4} {:.4}",
                 if nodes.is_cluster[*s] { "cluster" } else { "element" },
@@ -298,9 +356,9 @@ fn object_breakdown(scene: &radray::scene::SceneDescription, objects: &[String])
                     } else if reach.has_shares(i) {
                         (reach.shares(i).find(|&(m, _)| m == member).map_or(0.0, |(_, c)| c as f64), 1)
                     } else {
-                        match arrival_direction(nodes, a, s) {
-                            Some(w) if reach.scale(i) > 0.0 => (
-                                reach.scale(i) as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
+                        match scales.unit_arrival(nodes, a, i, s) {
+                            Some(unit) => (
+                                unit.on_element(nodes.normal[member], nodes.centre[member]).x,
                                 if is_near(nodes, a, s) { 3 } else { 2 },
                             ),
                             _ => (nodes.open_gain(a), 4),
@@ -624,6 +682,7 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
             .map(|&e| {
                 let member = inputs.node[nodes.input[e] as usize] as usize;
                 let mut by_kind = [0.0f64; 5];
+                let mut direct_by_kind = [0.0f64; 5];
                 let mut up = e as u32;
                 while up != u32::MAX {
                     let a = up as usize;
@@ -632,20 +691,22 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                         let s = links.source[k] as usize;
                         let sent = scales.sent(nodes, links, a, k, &nodes.exitance);
                         let t = mean(sent - nodes.emission[s].as_dvec3()) * links.form_factor[k] as f64;
+                        let t_direct = mean(nodes.emission[s].as_dvec3()) * links.form_factor[k] as f64;
                         let (gain, kind) = if !nodes.is_cluster[a] {
                             (nodes.open_gain(a), 0)
                         } else if reach.has_shares(i) {
                             (reach.shares(i).find(|&(m, _)| m == member).map_or(0.0, |(_, c)| c as f64), 1)
                         } else {
-                            match arrival_direction(nodes, a, s) {
-                                Some(w) if reach.scale(i) > 0.0 => (
-                                    reach.scale(i) as f64 * nodes.normal[e].dot(w).max(0.0) as f64,
+                            match scales.unit_arrival(nodes, a, i, s) {
+                                Some(unit) => (
+                                    unit.on_element(nodes.normal[member], nodes.centre[member]).x,
                                     if is_near(nodes, a, s) { 3 } else { 2 },
                                 ),
                                 _ => (nodes.open_gain(a), 4),
                             }
                         };
                         by_kind[kind] += t * gain;
+                        direct_by_kind[kind] += t_direct * gain;
                     }
                     up = nodes.parent[a];
                 }
@@ -674,7 +735,17 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 }
                 if std::env::var("GATHERED_DETAIL").is_ok() {
                     println!(
-                        "leaf {e} n {:.2} {:.2} {:.2} links {:.4} {:.4} {:.4} {:.4} {:.4} rays {:.4}",
+                        "leaf {e} at {:.3} {:.3} {:.3} level {} B {:.4} direct {:.4} {:.4} {:.4} {:.4} {:.4} n {:.2} {:.2} {:.2} links {:.4} {:.4} {:.4} {:.4} {:.4} rays {:.4}",
+                        nodes.centre[e].x,
+                        nodes.centre[e].y,
+                        nodes.centre[e].z,
+                        nodes.level[e],
+                        mean(nodes.exitance[e]),
+                        direct_by_kind[0],
+                        direct_by_kind[1],
+                        direct_by_kind[2],
+                        direct_by_kind[3],
+                        direct_by_kind[4],
                         n.x,
                         n.y,
                         n.z,
@@ -884,4 +955,16 @@ fn leaf_weighted_form_factor(
         sum += f * v * nodes.exitance_mean[at];
     }
     sum / n as f64
+}
+
+/// The leaves below `node`.
+fn radiosity_leaves(nodes: &radray::radiosity::hierarchy::nodes::Nodes, node: usize, out: &mut Vec<usize>) {
+    let mut stack = vec![node];
+    while let Some(n) = stack.pop() {
+        if nodes.is_leaf(n) {
+            out.push(n);
+        } else {
+            stack.extend(nodes.children(n));
+        }
+    }
 }

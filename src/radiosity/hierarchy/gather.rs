@@ -14,23 +14,129 @@ use super::nodes::Nodes;
 use super::source_weights::{Cursor, SourceWeights};
 use super::visibility::sample_element;
 
-/// Light a cluster receives over one link, from one direction: a member of unit normal n takes the
-/// irradiance `irradiance`·max(0, n·ω), ω = `towards`.
+/// Light a cluster receives over one link: a member of unit normal n at position x takes the
+/// irradiance `irradiance`·g(n, x), g = `Arrival::weight`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Arrival {
     /// ω: unit direction from the receiver's centre to the source's.
     pub towards: Vec3,
-    /// w_l = P_l / D_open,R(ω) (W/m²): the link's power P_l = A_R·F_l·B_S over the open projected
-    /// area of the receiver's members toward ω (`ArrivalScales`), the irradiance on a member facing
-    /// ω head-on.
+    /// w_l = P_l / D_open,R (W/m²): the link's power P_l = A_R·F_l·B_S over the receiver's members'
+    /// open area weighted by g (`ArrivalScales`), the irradiance on a member facing ω head-on at the
+    /// receiver's centre.
     pub irradiance: DVec3,
+    /// A far link's source as a point (`PointSource`), so that each member takes the light by its
+    /// own position; `None`: by its orientation only, g = max(0, n·ω) (a near link, whose ends
+    /// overlap).
+    pub source: Option<PointSource>,
 }
 
 impl Arrival {
-    /// The irradiance this arrival gives a member of unit normal `normal`: w·max(0, n·ω).
-    pub fn on_element(&self, normal: Vec3) -> DVec3 {
-        self.irradiance * normal.dot(self.towards).max(0.0) as f64
+    /// An arrival from direction ω only (g = max(0, n·ω) on every member, wherever it is).
+    pub fn directional(towards: Vec3, irradiance: DVec3) -> Arrival {
+        Arrival { towards, irradiance, source: None }
     }
+
+    /// g of a member of unit normal `normal` at `position`: `PointSource::weight` for a far link,
+    /// else max(0, n·ω).
+    pub fn weight(&self, normal: Vec3, position: Vec3) -> f64 {
+        match &self.source {
+            Some(source) => source.weight(normal, position),
+            None => normal.dot(self.towards).max(0.0) as f64,
+        }
+    }
+
+    /// The irradiance this arrival gives a member of unit normal `normal` at `position`: w·g.
+    pub fn on_element(&self, normal: Vec3, position: Vec3) -> DVec3 {
+        self.irradiance * self.weight(normal, position)
+    }
+}
+
+/// The source of a far link as seen from its receiver's members: a point at the source's centre
+/// c_S, of intensity ∝ max(0, −n_S·ω) when the source is flat (all its members share the unit
+/// normal n_S: an element, a window of two triangles), isotropic otherwise. A member at x with
+/// unit normal n takes, relative to a member facing the source head-on at the receiver's centre,
+///
+/// g(n, x) = max(0, n·ω_x) · (d² / d_x²) · s(ω_x) / s(ω),  ω_x = (c_S − x)/d_x, d_x = |c_S − x|,
+///
+/// d and ω the centres' distance and direction, s(ω) = max(0, −n_S·ω) (1 for a source that is not
+/// flat): the point-source irradiance at each member's centroid. With g = max(0, n·ω) (the same on
+/// every coplanar member) a cluster of long thin coplanar members (the slivers of a fan-triangulated
+/// lunette, each spanning its radius) received one value per cluster, and neighbouring clusters'
+/// values stepped by up to 20% (session 16, docs/accuracy.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointSource {
+    pub centre: Vec3,
+    /// n_S of a flat source, zero when the source is not flat (or faces the receiver's centre
+    /// edge-on, s(ω) = 0).
+    pub normal: Vec3,
+    /// d².
+    pub distance_sq: f32,
+    /// s(ω) (1 when `normal` is zero).
+    pub facing: f32,
+}
+
+impl PointSource {
+    /// The point source of link (receiver ← source) with `flat_normal` the source's common member
+    /// normal (zero when it has none, `flat_normals`).
+    pub fn of_link(nodes: &Nodes, receiver: usize, source: usize, flat_normal: Vec3) -> PointSource {
+        let centre = nodes.centre[source];
+        let offset = centre - nodes.centre[receiver];
+        PointSource::facing(centre, offset.normalize_or_zero(), offset.length_squared(), flat_normal)
+    }
+
+    /// The point source at `centre`, seen from the receiver's centre in unit direction `towards` at
+    /// squared distance `distance_sq`, of flat normal `flat_normal` (zero: not flat).
+    pub fn facing(centre: Vec3, towards: Vec3, distance_sq: f32, flat_normal: Vec3) -> PointSource {
+        let facing = (-flat_normal.dot(towards)).max(0.0);
+        if facing > 1e-3 {
+            PointSource { centre, normal: flat_normal, distance_sq, facing }
+        } else {
+            PointSource { centre, normal: Vec3::ZERO, distance_sq, facing: 1.0 }
+        }
+    }
+
+    /// g(n, x) (see the type); 0 at the source's centre. With o = c_S − x: g = (n·o)·(−n_S·o)·d² /
+    /// (s(ω)·|o|⁴) for a flat source, (n·o)·d² / |o|³ otherwise; a member facing away (n·o ≤ 0), or
+    /// behind a flat source's plane, gets 0 before any square root (the push evaluates this for
+    /// every member and pending arrival at every sweep).
+    pub fn weight(&self, normal: Vec3, position: Vec3) -> f64 {
+        let offset = self.centre - position;
+        let cos_receiver = normal.dot(offset);
+        if !(cos_receiver > 0.0) {
+            return 0.0;
+        }
+        let d2 = offset.length_squared() as f64;
+        if self.normal == Vec3::ZERO {
+            return cos_receiver as f64 * self.distance_sq as f64 / (d2 * d2.sqrt());
+        }
+        let cos_source = -self.normal.dot(offset);
+        if !(cos_source > 0.0) {
+            return 0.0;
+        }
+        cos_receiver as f64 * cos_source as f64 * self.distance_sq as f64 / (self.facing as f64 * d2 * d2)
+    }
+}
+
+/// Per node, the unit normal all its members share (`Nodes::members`; an element's own normal), or
+/// zero when they do not (normals within 1e-4 of each other count as one). Children come after their
+/// parent, so one pass in reverse index order suffices.
+pub fn flat_normals(nodes: &Nodes) -> Vec<Vec3> {
+    let mut out = vec![Vec3::ZERO; nodes.len()];
+    for n in (0..nodes.len()).rev() {
+        out[n] = if !nodes.is_cluster[n] {
+            nodes.normal[n]
+        } else {
+            let mut children = nodes.children(n);
+            let first = children.next().map_or(Vec3::ZERO, |c| out[c]);
+            let shared = first != Vec3::ZERO && children.all(|c| out[c].dot(first) > 1.0 - 1e-4);
+            if shared {
+                first
+            } else {
+                Vec3::ZERO
+            }
+        };
+    }
+    out
 }
 
 /// Irradiance (W/m², before reflection) a node gathers over its own links, in two parts:
@@ -64,8 +170,12 @@ impl Irradiance {
 /// How each link of a cluster receiver reaches the receiver's members, per link (`Irradiance`; read
 /// through `ArrivalScales::receiver`):
 ///
-/// - scale s_l = A_R / D_open,R(ω_l): the link becomes an `Arrival` of head-on irradiance
-///   w_l = s_l·F_l·B_S, each member taking w_l·max(0, n_i·ω_l);
+/// - scale s_l = A_R / D_open,R: the link becomes an `Arrival` of head-on irradiance
+///   w_l = s_l·F_l·B_S, each member taking w_l·g_i; for a far link (not `links::is_near`)
+///   g_i = `PointSource::weight` at the member's centroid (its own direction and distance to the
+///   source, and the source's cosine toward it when the source is flat), D_open,R = Σ_j A_open,j·g_j
+///   (`positional`); for a near one, and a far one no member sees by position, g_i = max(0,
+///   n_i·ω_l) and D_open,R(ω_l) = Σ_j A_open,j·max(0, n_j·ω_l);
 /// - shares, when the link's ends hold at most `SHARE_PAIRS` (member, source member) pairs
 ///   (`Nodes::members`): its power goes to each member i by the member's own unoccluded form factor
 ///   to the source, F_i = Σ_σ F(x_i → σ) (Lambert's exact `form_factor::point_to_polygon` from the
@@ -99,6 +209,10 @@ pub struct ArrivalScales {
     source: Vec<u32>,
     /// Per entry: s_l, 0 when the link has shares or is uniform.
     scale: Vec<f32>,
+    /// Per entry: the arrival is evaluated by the member's position (`PointSource`).
+    positional: Vec<bool>,
+    /// Per node: `flat_normals`, the `PointSource::normal` of a link from it.
+    flat_normal: Vec<Vec3>,
     /// Per entry (and one past the last): the first of its shares in `share_member` / `share_factor`.
     share_offsets: Vec<u32>,
     /// Per node (and one past the last): the first of its members in `members`; only receivers with
@@ -122,6 +236,7 @@ const _: () = assert!(NEAR_SHARE_MEMBERS <= 256 && SHARE_PAIRS <= 256);
 #[derive(Clone, Copy, Debug)]
 pub struct ReceiverScales<'a> {
     scale: &'a [f32],
+    positional: &'a [bool],
     share_offsets: &'a [u32],
     members: &'a [u32],
     share_member: &'a [u8],
@@ -132,6 +247,11 @@ impl<'a> ReceiverScales<'a> {
     /// s of the receiver's link i (0: shares or uniform).
     pub fn scale(&self, i: usize) -> f32 {
         self.scale.get(i).copied().unwrap_or(0.0)
+    }
+
+    /// Whether the receiver's link i (an arrival) is evaluated by each member's position.
+    pub fn positional(&self, i: usize) -> bool {
+        self.positional.get(i).copied().unwrap_or(false)
     }
 
     /// Whether the receiver's link i reaches its members by shares.
@@ -156,6 +276,7 @@ impl<'a> ReceiverScales<'a> {
 #[derive(Default)]
 struct ReceiverReach {
     scale: Vec<f32>,
+    positional: Vec<bool>,
     share_count: Vec<u32>,
     members: Vec<u32>,
     share_member: Vec<u8>,
@@ -198,6 +319,8 @@ impl ArrivalScales {
             link_offsets,
             source: Vec::with_capacity(entries),
             scale: Vec::with_capacity(entries),
+            positional: Vec::with_capacity(entries),
+            flat_normal: flat_normals(nodes),
             share_offsets: Vec::with_capacity(entries + 1),
             member_offsets: vec![0u32; node_count + 1],
             ..Default::default()
@@ -205,13 +328,14 @@ impl ArrivalScales {
         out.share_offsets.push(0);
         for block in receivers.chunks(RECEIVER_BLOCK) {
             let rows: Vec<ReceiverReach> =
-                block.par_iter().map(|&r| receiver_reach(nodes, links, r, previous)).collect();
+                block.par_iter().map(|&r| receiver_reach(nodes, links, r, previous, &out.flat_normal)).collect();
             let shares: usize = rows.iter().map(|row| row.share_member.len()).sum();
             reserve_growing(&mut out.share_member, shares);
             reserve_growing(&mut out.share_factor, shares);
             for (&r, row) in block.iter().zip(rows) {
                 out.source.extend(links.range(r).map(|k| links.source[k]));
                 out.scale.extend_from_slice(&row.scale);
+                out.positional.extend_from_slice(&row.positional);
                 for c in row.share_count {
                     let last = *out.share_offsets.last().expect("starts with 0");
                     out.share_offsets.push(last + c);
@@ -242,11 +366,31 @@ impl ArrivalScales {
         self.sent.sent(nodes, links, r, k, values)
     }
 
+    /// The `Arrival` of cluster receiver `receiver`'s link i (from `source`) for a unit transfer
+    /// F·B_S = 1 (its `irradiance` is the scale s_l); `None` when the link is not an arrival (it has
+    /// shares, is uniform, or the receiver is an element).
+    pub fn unit_arrival(&self, nodes: &Nodes, receiver: usize, i: usize, source: usize) -> Option<Arrival> {
+        let reach = self.receiver(receiver);
+        if !nodes.is_cluster[receiver] || reach.has_shares(i) || !(reach.scale(i) > 0.0) {
+            return None;
+        }
+        let towards = arrival_direction(nodes, receiver, source)?;
+        let point = reach.positional(i).then(|| self.point_source(nodes, receiver, source, towards));
+        Some(Arrival { towards, irradiance: DVec3::splat(reach.scale(i) as f64), source: point })
+    }
+
+    /// The `PointSource` of link (receiver ← source) of direction `towards` (`arrival_direction`).
+    fn point_source(&self, nodes: &Nodes, receiver: usize, source: usize, towards: Vec3) -> PointSource {
+        let centre = nodes.centre[source];
+        PointSource::facing(centre, towards, centre.distance_squared(nodes.centre[receiver]), self.flat_normal[source])
+    }
+
     /// The scales of receiver `r`'s links.
     pub fn receiver(&self, r: usize) -> ReceiverScales<'_> {
         if r + 1 >= self.link_offsets.len() {
             return ReceiverScales {
                 scale: &[],
+                positional: &[],
                 share_offsets: &[0],
                 members: &[],
                 share_member: &[],
@@ -257,6 +401,7 @@ impl ArrivalScales {
         let members = self.member_offsets[r] as usize..self.member_offsets[r + 1] as usize;
         ReceiverScales {
             scale: &self.scale[entries.clone()],
+            positional: &self.positional[entries.clone()],
             share_offsets: &self.share_offsets[entries.start..entries.end + 1],
             members: &self.members[members],
             share_member: &self.share_member,
@@ -276,10 +421,20 @@ fn reserve_growing<T>(v: &mut Vec<T>, more: usize) {
 
 /// `ArrivalScales` of the links of cluster receiver `r`, in link order; a link of the same source in
 /// `previous` is copied, the others are computed.
-fn receiver_reach(nodes: &Nodes, links: &Links, r: usize, previous: Option<&ArrivalScales>) -> ReceiverReach {
+fn receiver_reach(
+    nodes: &Nodes,
+    links: &Links,
+    r: usize,
+    previous: Option<&ArrivalScales>,
+    flat_normal: &[Vec3],
+) -> ReceiverReach {
     let range = links.range(r);
-    let mut out =
-        ReceiverReach { scale: vec![0.0; range.len()], share_count: vec![0; range.len()], ..Default::default() };
+    let mut out = ReceiverReach {
+        scale: vec![0.0; range.len()],
+        positional: vec![false; range.len()],
+        share_count: vec![0; range.len()],
+        ..Default::default()
+    };
     // The previous entries of this receiver by source.
     let old = previous.filter(|p| r + 1 < p.link_offsets.len());
     let mut known: Vec<(u32, usize)> = match old {
@@ -291,12 +446,13 @@ fn receiver_reach(nodes: &Nodes, links: &Links, r: usize, previous: Option<&Arri
     let fresh: Vec<usize> = range.clone().filter(|&k| reused(links.source[k]).is_none()).collect();
     let mut members = Vec::new();
     nodes.members(r, &mut members);
-    let mut computed = compute_reach(nodes, links, r, &members, &fresh).into_iter();
+    let mut computed = compute_reach(nodes, links, r, &members, &fresh, flat_normal).into_iter();
     for (i, k) in range.enumerate() {
         match reused(links.source[k]) {
             Some(e) => {
                 let old = old.expect("known entries come from previous");
                 out.scale[i] = old.scale[e];
+                out.positional[i] = old.positional[e];
                 let shares = old.share_offsets[e] as usize..old.share_offsets[e + 1] as usize;
                 out.share_count[i] = shares.len() as u32;
                 out.share_member.extend_from_slice(&old.share_member[shares.clone()]);
@@ -305,6 +461,10 @@ fn receiver_reach(nodes: &Nodes, links: &Links, r: usize, previous: Option<&Arri
             None => match computed.next().expect("one reach per fresh link") {
                 Reach::Uniform => {}
                 Reach::Arrival(s) => out.scale[i] = s,
+                Reach::Positional(s) => {
+                    out.scale[i] = s;
+                    out.positional[i] = true;
+                }
                 Reach::Shares(shares) => {
                     out.share_count[i] = shares.len() as u32;
                     for (m, c) in shares {
@@ -325,27 +485,52 @@ fn receiver_reach(nodes: &Nodes, links: &Links, r: usize, previous: Option<&Arri
 /// receiver's members, c_i).
 enum Reach {
     Uniform,
+    /// An arrival by orientation only, of scale s.
     Arrival(f32),
+    /// An arrival by each member's position (`PointSource`), of scale s.
+    Positional(f32),
     Shares(Vec<(u8, f32)>),
 }
 
 /// The reach of links `fresh` (indices into `links`, all of receiver `r` of members `members`), in
 /// that order.
-fn compute_reach(nodes: &Nodes, links: &Links, r: usize, members: &[usize], fresh: &[usize]) -> Vec<Reach> {
+fn compute_reach(
+    nodes: &Nodes,
+    links: &Links,
+    r: usize,
+    members: &[usize],
+    fresh: &[usize],
+    flat_normal: &[Vec3],
+) -> Vec<Reach> {
     if fresh.is_empty() {
         return Vec::new();
     }
     let directions: Vec<Option<Vec3>> =
         fresh.iter().map(|&k| arrival_direction(nodes, r, links.source[k] as usize)).collect();
+    // Far links' sources as points (`PointSource`); near links are evaluated by orientation only.
+    let points: Vec<Option<PointSource>> = fresh
+        .iter()
+        .zip(&directions)
+        .map(|(&k, d)| {
+            let s = links.source[k] as usize;
+            (d.is_some() && !is_near(nodes, r, s)).then(|| PointSource::of_link(nodes, r, s, flat_normal[s]))
+        })
+        .collect();
     let mut sums = vec![0.0f64; directions.len()];
+    let mut positional_sums = vec![0.0f64; directions.len()];
     for &m in members {
-        let (a, n) = (nodes.open_area[m] as f64, nodes.normal[m]);
+        let (a, n, x) = (nodes.open_area[m] as f64, nodes.normal[m], nodes.centre[m]);
         if !(a > 0.0) {
             continue;
         }
-        for (sum, d) in sums.iter_mut().zip(&directions) {
+        for ((sum, positional), (d, point)) in
+            sums.iter_mut().zip(&mut positional_sums).zip(directions.iter().zip(&points))
+        {
             if let Some(d) = d {
                 *sum += a * n.dot(*d).max(0.0) as f64;
+            }
+            if let Some(point) = point {
+                *positional += a * point.weight(n, x);
             }
         }
     }
@@ -353,8 +538,8 @@ fn compute_reach(nodes: &Nodes, links: &Links, r: usize, members: &[usize], fres
     let (mut sources, mut picks) = (Vec::new(), Vec::new());
     fresh
         .iter()
-        .zip(directions.iter().zip(sums))
-        .map(|(&k, (d, sum))| {
+        .zip(directions.iter().zip(sums.into_iter().zip(positional_sums)))
+        .map(|(&k, (d, (sum, positional)))| {
             let s = links.source[k] as usize;
             if d.is_none() {
                 return Reach::Uniform;
@@ -371,7 +556,9 @@ fn compute_reach(nodes: &Nodes, links: &Links, r: usize, members: &[usize], fres
                     return Reach::Shares(shares);
                 }
             }
-            if sum > 0.0 {
+            if positional > 0.0 {
+                Reach::Positional((area / positional) as f32)
+            } else if sum > 0.0 {
                 Reach::Arrival((area / sum) as f32)
             } else {
                 Reach::Uniform
@@ -525,7 +712,8 @@ pub fn gather_into(
         } else if reach.has_shares(i) {
             direct.extend(reach.shares(i).map(|(m, c)| (m, transfer * c as f64)));
         } else if let (Some(towards), true) = (arrival_direction(nodes, receiver, s), reach.scale(i) > 0.0) {
-            arrivals.push(Arrival { towards, irradiance: transfer * reach.scale(i) as f64 });
+            let source = reach.positional(i).then(|| scales.point_source(nodes, receiver, s, towards));
+            arrivals.push(Arrival { towards, irradiance: transfer * reach.scale(i) as f64, source });
         } else {
             uniform += transfer;
         }
@@ -572,8 +760,8 @@ pub fn push_step(
     if nodes.is_cluster[node] {
         return Pushed { uniform, lo: down.lo, hi };
     }
-    let normal = nodes.normal[node];
-    let oriented: DVec3 = arrivals[down.lo..hi].iter().map(|a| a.on_element(normal)).sum();
+    let (normal, position) = (nodes.normal[node], nodes.centre[node]);
+    let oriented: DVec3 = arrivals[down.lo..hi].iter().map(|a| a.on_element(normal, position)).sum();
     Pushed { uniform: uniform + oriented, lo: hi, hi }
 }
 
@@ -616,7 +804,11 @@ pub fn push_pull(nodes: &Nodes, root: usize, own_irradiance: &[Irradiance], exit
         total[n] = if nodes.is_cluster[n] && nodes.area[n] > 0.0 {
             let power: DVec3 = arrivals[g.lo..g.hi]
                 .iter()
-                .map(|a| a.irradiance * nodes.open_projected_area(n, a.towards))
+                .map(|a| {
+                    a.irradiance
+                        * nodes
+                            .member_sum(n, |m| nodes.open_area[m] as f64 * a.weight(nodes.normal[m], nodes.centre[m]))
+                })
                 .sum::<DVec3>()
                 + g.uniform * nodes.open_area[n] as f64;
             power / nodes.area[n] as f64
