@@ -265,6 +265,29 @@ fn triangles_facing(normals: &[Vec3]) -> Vec<(Vec<Vec3>, f32, f32)> {
 
 /// A far source element at `towards` × 1000 from the root's centre, facing back, and one link root
 /// ← source of form factor `form_factor`; the source's exitance is 1.
+/// One link receiver ← source whose form factor is the members' exact ones weighted by area:
+/// F = Σ A_m F_m / A_receiver; returns the link and F.
+fn link_of_member_form_factors(
+    nodes: &Nodes,
+    receiver: usize,
+    source: usize,
+    members: &[usize],
+    member_form_factors: &[f64],
+) -> (hierarchy::links::Links, f64) {
+    let form_factor = members.iter().zip(member_form_factors).map(|(&m, f)| nodes.area[m] as f64 * f).sum::<f64>()
+        / nodes.area[receiver] as f64;
+    let links = hierarchy::links::Links::from_records(
+        nodes.len(),
+        vec![hierarchy::links::LinkRecord {
+            receiver: receiver as u32,
+            source: source as u32,
+            form_factor: form_factor as f32,
+            spread: 0.0,
+        }],
+    );
+    (links, form_factor)
+}
+
 fn link_from(nodes: &mut Nodes, root: usize, towards: Vec3, form_factor: f32) -> hierarchy::links::Links {
     let c = nodes.centre[root] + towards * 1000.0;
     let (u, v) = (towards.any_orthonormal_vector(), towards.cross(towards.any_orthonormal_vector()));
@@ -1028,17 +1051,7 @@ fn a_near_link_reaches_each_member_by_its_exact_form_factor() {
     let members: Vec<usize> = inputs.node.iter().map(|&n| n as usize).collect();
     let exact: Vec<f64> =
         members.iter().map(|&m| point_to_polygon(nodes.centre[m], nodes.normal[m], &nodes.corners[source])).collect();
-    let form_factor =
-        members.iter().zip(&exact).map(|(&m, f)| nodes.area[m] as f64 * f).sum::<f64>() / nodes.area[root] as f64;
-    let links = hierarchy::links::Links::from_records(
-        nodes.len(),
-        vec![hierarchy::links::LinkRecord {
-            receiver: root as u32,
-            source: source as u32,
-            form_factor: form_factor as f32,
-            spread: 0.0,
-        }],
-    );
+    let (links, form_factor) = link_of_member_form_factors(&nodes, root, source, &members, &exact);
     let scales = gather::ArrivalScales::new(&nodes, &links);
     assert!(scales.receiver(root).has_shares(0));
     let own: Vec<gather::Irradiance> =
@@ -1105,17 +1118,7 @@ fn a_far_link_reaches_each_sliver_of_a_fan_by_its_own_position() {
             pieces.iter().map(|t| area(t) * element_to_element(t, nodes.normal[m], &lamp).0).sum::<f64>() / a
         })
         .collect();
-    let form_factor =
-        members.iter().zip(&exact).map(|(&m, f)| nodes.area[m] as f64 * f).sum::<f64>() / nodes.area[root] as f64;
-    let links = hierarchy::links::Links::from_records(
-        nodes.len(),
-        vec![hierarchy::links::LinkRecord {
-            receiver: root as u32,
-            source: source as u32,
-            form_factor: form_factor as f32,
-            spread: 0.0,
-        }],
-    );
+    let (links, form_factor) = link_of_member_form_factors(&nodes, root, source, &members, &exact);
     let scales = gather::ArrivalScales::new(&nodes, &links);
     assert!(!scales.receiver(root).has_shares(0) && scales.receiver(root).positional(0), "the test needs an arrival");
     let own: Vec<gather::Irradiance> =
