@@ -3,6 +3,12 @@
 
 usage: python3 references/make_reference.py SCENE.toml SPP [--name NAME] [--seed S] [--preview OUT.exr]
                                              [--pass-spp 128] [--budget-s SECONDS] [--resume] [--variant llvm_ad_rgb]
+                                             [--out-dir DIR]
+
+--out-dir DIR writes the folder below to DIR instead of references/NAME/ (and its resume cache to
+DIR/.cache.npz): for scenes that stay outside the repository (Crytek Sponza, 26 MB of OBJ). A
+mesh with `two_sided = true` is rendered with two-sided reflection (mitsuba_scene.scene_dict's
+two_sided: emitters still emit from their front only).
 
 Without --preview it fills references/NAME/ (NAME defaults to the TOML file's stem):
   scene.obj, scene.mtl (+ textures/)  copied unchanged from the scene's [[mesh]] obj folder
@@ -47,17 +53,17 @@ EPS = 0.01
 
 
 def scene_from_toml(path):
-    """(obj path, camera dict) from a radray scene file with one [[mesh]] and a [camera]."""
+    """(obj path, camera dict, two_sided) from a radray scene file with one [[mesh]] and a [camera]."""
     with open(path, "rb") as f:
         t = tomllib.load(f)
     meshes = t.get("mesh", [])
-    if len(meshes) != 1 or set(meshes[0]) - {"obj", "two_sided"} or meshes[0].get("two_sided"):
-        raise SystemExit("%s: need exactly one [[mesh]] with only obj (one-sided)" % path)
+    if len(meshes) != 1 or set(meshes[0]) - {"obj", "two_sided"}:
+        raise SystemExit("%s: need exactly one [[mesh]] with only obj (and two_sided)" % path)
     obj = os.path.join(os.path.dirname(os.path.abspath(path)), meshes[0]["obj"])
     c, img = t["camera"], t.get("image", {})
     cam = {"eye": c["eye"], "look_at": c["look_at"], "up": c.get("up", [0.0, 1.0, 0.0]), "vfov_deg": c["vfov_deg"],
            "width": img.get("width", 256), "height": img.get("height", 256)}
-    return obj, cam
+    return obj, cam, bool(meshes[0].get("two_sided", False))
 
 
 def copy_scene(obj, out):
@@ -80,7 +86,7 @@ def scene_key(folder, seed):
     h = hashlib.sha256(str(seed).encode())
     for root, _, files in sorted(os.walk(folder)):
         for f in sorted(files):
-            if f.startswith("reference") or ".mitsuba_cache" in root:
+            if f.startswith("reference") or f.startswith(".cache") or ".mitsuba_cache" in root:
                 continue
             h.update(f.encode())
             h.update(open(os.path.join(root, f), "rb").read())
@@ -98,10 +104,11 @@ def main():
     ap.add_argument("--budget-s", type=float, default=None)
     ap.add_argument("--resume", action="store_true")
     ap.add_argument("--variant")
+    ap.add_argument("--out-dir")
     a = ap.parse_args()
     name = a.name or os.path.splitext(os.path.basename(a.toml))[0]
-    obj, cam = scene_from_toml(a.toml)
-    out = os.path.join(HERE, name)
+    obj, cam, two_sided = scene_from_toml(a.toml)
+    out = os.path.abspath(a.out_dir) if a.out_dir else os.path.join(HERE, name)
     if a.preview:
         import tempfile
         out = tempfile.mkdtemp(prefix="mkref_")
@@ -109,7 +116,7 @@ def main():
     with open(os.path.join(out, "camera.json"), "w") as f:
         json.dump(cam, f, indent=1)
     mi, variant = ms.init_mitsuba(a.variant)
-    scene = mi.load_dict(ms.scene_dict(mi, out, spp=a.spp, seed=a.seed, max_depth=64))
+    scene = mi.load_dict(ms.scene_dict(mi, out, spp=a.spp, seed=a.seed, max_depth=64, two_sided=two_sided))
     shutil.rmtree(os.path.join(out, ".mitsuba_cache"), ignore_errors=True)
     if a.preview:
         t = time.perf_counter()
@@ -124,7 +131,7 @@ def main():
         return
     half_cap = a.spp // 2
     acc, times, half, k = [0.0, 0.0], [0.0, 0.0], 0, 0
-    cache = os.path.join(HERE, ".cache", name + ".npz")
+    cache = os.path.join(out, ".cache.npz") if a.out_dir else os.path.join(HERE, ".cache", name + ".npz")
     key = scene_key(out, a.seed)
     if a.resume and os.path.exists(cache):
         c = np.load(cache)
