@@ -629,14 +629,19 @@ fn assign_materials(nodes: &mut Nodes, texels: &InputTexels) {
     nodes.texels = (!texels.surfaces.is_untextured()).then(|| Arc::new(texels.clone()));
 }
 
-/// (Σ A·E, Σ A·E / Σ A) over the input triangles (mean channel; W and W/m²); (1, 1) when nothing
-/// emits (then every link error is 0 anyway).
+/// (Σ A·E, Σ A·E / Σ A_front) over the input triangles (mean channel; W and W/m²), the power of
+/// both sides of a two-sided emitter but the area of each sheet once (its front): the threshold
+/// ε·Ē is the same for a room whether its surfaces are two-sided or not (counting the backs halved
+/// it and doubled the links, session 17); (1, 1) when nothing emits (then every link error is 0
+/// anyway).
 fn emitted_power(nodes: &Nodes, inputs: &clusters::InputTriangles) -> (f64, f64) {
     let (mut power, mut area) = (0.0f64, 0.0f64);
-    for &n in &inputs.node {
+    for (i, &n) in inputs.node.iter().enumerate() {
         let n = n as usize;
         power += nodes.area[n] as f64 * nodes::mean_channel(nodes.emission[n].as_dvec3());
-        area += nodes.area[n] as f64;
+        if !inputs.back[i] {
+            area += nodes.area[n] as f64;
+        }
     }
     if power > 0.0 && area > 0.0 {
         (power, power / area)
