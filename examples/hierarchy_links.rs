@@ -15,7 +15,7 @@
 //!   emitting leaf times its E, visibility by rays from the leaf's three quadrature points).
 //! - `--link-bias [EVERY] [RECEIVER_OBJECT SOURCE_OBJECT]`: every EVERY-th link's A_R·B_S·F against a
 //!   1024-sample `visibility::sampled_form_factor` (unbiased, visibility included), by link type;
-//!   with `LINK_BIAS_LEAVES` set the reference weights each source leaf by its own exitance.
+//!   an object named `-` is any object; with `LINK_BIAS_LEAVES` set the reference weights each source leaf by its own exitance.
 //! - `--sent NAME`: where the power NAME sends lands, by receiving object: the links' A_R·F_RS (a
 //!   cluster source's share by open area, the receiver's split by open area) against cosine rays.
 //! - `--gathered NAME...`: per leaf, the indirect irradiance the links push against cosine rays that
@@ -27,10 +27,15 @@
 //!   none where they cannot exchange light, is right): the unoccluded pair transfer of the pairs with
 //!   none (and their visible part by source object) and with two or more.
 //!
+//! - `--unlinked NAME`: cosine rays from every leaf of NAME (both sheets) to the leaf they hit, and
+//!   whether any link joins an ancestor-or-self of the one to an ancestor-or-self of the other: the
+//!   exitance those rays read, linked and not, by the hit leaf's object; `UNLINKED_DETAIL=K` prints
+//!   K unlinked pairs with their ancestor chains.
+//!
 //! usage: hierarchy_links SCENE.toml SURFACE [DEPTH] [MIN_ELEMENT_SIZE VISIBILITY_RAYS]
 //!        hierarchy_links SCENE.toml --object|--gathered NAME [NAME...]
 //!        hierarchy_links SCENE.toml --link-bias [EVERY] [RECEIVER_OBJECT SOURCE_OBJECT]
-//!        hierarchy_links SCENE.toml --sent|--coverage NAME
+//!        hierarchy_links SCENE.toml --sent|--coverage|--unlinked NAME
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
@@ -60,6 +65,9 @@ fn main() -> ExitCode {
     }
     if args[2] == "--gathered" {
         return gathered_by_normal(&scene, &args[3..]);
+    }
+    if args[2] == "--unlinked" {
+        return unlinked(&scene, &args[3]);
     }
     if args[2] == "--coverage" {
         return coverage(&scene, &args[3]);
@@ -447,25 +455,29 @@ fn link_bias(
     let accel = radray::accel::Accel::build(&positions, &triangles);
     let ctx = VisibilityContext { accel: &accel, rays: 1024, offset: scene.diagonal() * 1e-5, seed: 0xb1a5 };
     let inputs = structure.inputs();
-    // Whether node n has a leaf on object `name` (any, when no name is given).
-    let touches = |n: usize, name: Option<&String>| {
-        let Some(name) = name else { return true };
-        let mut stack = vec![n];
-        while let Some(m) = stack.pop() {
-            if nodes.is_leaf(m) && !nodes.is_cluster[m] {
-                if scene.surfaces[inputs.surface[nodes.input[m] as usize] as usize].object == *name {
-                    return true;
+    // Whether node n has a leaf on object `name` (any, when no name is given), for every node at once.
+    let on_object = |name: Option<&String>| -> Vec<bool> {
+        let Some(name) = name.filter(|n| n.as_str() != "-") else { return vec![true; nodes.len()] };
+        let mut has = vec![false; nodes.len()];
+        for m in 0..nodes.len() {
+            if nodes.is_leaf(m)
+                && !nodes.is_cluster[m]
+                && scene.surfaces[inputs.surface[nodes.input[m] as usize] as usize].object == *name
+            {
+                let mut up = m as u32;
+                while up != u32::MAX && !has[up as usize] {
+                    has[up as usize] = true;
+                    up = nodes.parent[up as usize];
                 }
-            } else {
-                stack.extend(nodes.children(m));
             }
         }
-        false
+        has
     };
+    let (receiving, sending) = (on_object(receiver_object), on_object(source_object));
     let records: Vec<_> = links
         .to_records()
         .into_iter()
-        .filter(|l| touches(l.receiver as usize, receiver_object) && touches(l.source as usize, source_object))
+        .filter(|l| receiving[l.receiver as usize] && sending[l.source as usize])
         .collect();
     let picked: Vec<_> = records.iter().step_by(every.max(1)).collect();
     let rows: Vec<(usize, f64, f64)> = picked
@@ -663,12 +675,26 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
     let scales = ArrivalScales::new(nodes, links);
     let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
     let front: Vec<usize> = leaves.iter().copied().filter(|&n| !inputs.back[nodes.input[n] as usize]).collect();
-    let positions: Vec<glam::Vec3> = front.iter().flat_map(|&n| nodes.corners[n]).collect();
-    let triangles: Vec<[u32; 3]> = (0..front.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let back: Vec<usize> = leaves.iter().copied().filter(|&n| inputs.back[nodes.input[n] as usize]).collect();
+    // One acceleration structure per side: a two-sided sheet's front and back leaves coincide, and a
+    // ray sees the one that faces it.
+    let accel_of = |sheet: &[usize]| {
+        let positions: Vec<glam::Vec3> = sheet.iter().flat_map(|&n| nodes.corners[n]).collect();
+        let triangles: Vec<[u32; 3]> = (0..sheet.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        radray::accel::Accel::build(&positions, &triangles)
+    };
+    let (accel, accel_back) = (accel_of(&front), accel_of(&back));
     let offset = scene.diagonal() * 1e-5;
     let mean = |v: DVec3| (v.x + v.y + v.z) / 3.0;
+    let mut objects_all: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
+    objects_all.sort();
+    objects_all.dedup();
+    let object_of = |n: usize| {
+        let name = &scene.surfaces[inputs.surface[nodes.input[n] as usize] as usize].object;
+        objects_all.binary_search(name).unwrap()
+    };
     for name in objects {
+        let by_object = std::sync::Mutex::new(vec![0.0f64; 2 * objects_all.len()]);
         let mine: Vec<usize> = front
             .iter()
             .copied()
@@ -677,12 +703,14 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                     && nodes.open_area[e] > 0.0
             })
             .collect();
-        let rows: Vec<(usize, f64, [f64; 5], f64)> = mine
+        let rows: Vec<(usize, f64, [f64; 5], f64, f64, f64)> = mine
             .par_iter()
             .map(|&e| {
                 let member = inputs.node[nodes.input[e] as usize] as usize;
                 let mut by_kind = [0.0f64; 5];
                 let mut direct_by_kind = [0.0f64; 5];
+                let mut directional = 0.0f64;
+                let mut per_object = vec![0.0f64; 2 * objects_all.len()];
                 let mut up = e as u32;
                 while up != u32::MAX {
                     let a = up as usize;
@@ -707,6 +735,41 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                         };
                         by_kind[kind] += t * gain;
                         direct_by_kind[kind] += t_direct * gain;
+                        // The same link with a cluster source sending its members' exitance weighted by
+                        // their open projected area towards the receiver (Sillion's directional cluster).
+                        let t_dir = if nodes.is_cluster[s] {
+                            let w = (nodes.centre[a] - nodes.centre[s]).normalize_or_zero();
+                            let p = nodes.member_sum(s, |m| nodes.open_area[m] as f64 * nodes.normal[m].dot(w).max(0.0) as f64);
+                            let pb = nodes.member_sum(s, |m| {
+                                nodes.open_area[m] as f64
+                                    * nodes.normal[m].dot(w).max(0.0) as f64
+                                    * mean(nodes.exitance[m] - nodes.emission[m].as_dvec3())
+                            });
+                            if p > 0.0 { pb / p * links.form_factor[k] as f64 } else { t }
+                        } else {
+                            t
+                        };
+                        directional += t_dir * gain;
+                        // By source object: an element's own; a cluster's members by their share of
+                        // the directional transfer.
+                        if nodes.is_cluster[s] {
+                            let w = (nodes.centre[a] - nodes.centre[s]).normalize_or_zero();
+                            let mut members = Vec::new();
+                            nodes.members(s, &mut members);
+                            let weight = |m: usize| {
+                                nodes.open_area[m] as f64
+                                    * nodes.normal[m].dot(w).max(0.0) as f64
+                                    * mean(nodes.exitance[m] - nodes.emission[m].as_dvec3())
+                            };
+                            let total: f64 = members.iter().map(|&m| weight(m)).sum();
+                            if total > 0.0 {
+                                for &m in &members {
+                                    per_object[object_of(m)] += t_dir * gain * weight(m) / total;
+                                }
+                            }
+                        } else {
+                            per_object[object_of(s)] += t * gain;
+                        }
                     }
                     up = nodes.parent[a];
                 }
@@ -718,19 +781,36 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 const RAYS: usize = 256;
                 let n = nodes.normal[e];
                 let (t, b) = n.any_orthonormal_pair();
-                let mut g = 0.0;
+                let (mut g, mut escaped) = (0.0, 0u32);
                 for _ in 0..RAYS {
                     let p = triangle_point(&nodes.corners[e], uniform(), uniform());
                     let (u1, u2) = (uniform(), uniform());
                     let r = u1.sqrt();
                     let phi = std::f32::consts::TAU * u2;
                     let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
-                    if let Some(hit) = accel.closest_hit(leave_surface(p, n, offset), d, 0.0, f32::INFINITY) {
-                        let l = front[hit.triangle as usize];
-                        // Only the front of a hit leaf sends.
-                        if nodes.normal[l].dot(d) < 0.0 {
-                            g += mean(nodes.exitance[l] - nodes.emission[l].as_dvec3());
+                    let origin = leave_surface(p, n, offset);
+                    let hits = [
+                        accel.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, front[h.triangle as usize])),
+                        accel_back.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, back[h.triangle as usize])),
+                    ];
+                    // The nearest hit; of two at the same distance (a two-sided sheet), the one facing the ray.
+                    let faces = |l: usize| nodes.normal[l].dot(d) < 0.0;
+                    let nearest = match hits {
+                        [Some(a), Some(b)] if (a.0 - b.0).abs() <= 1e-4 * a.0.max(b.0) => {
+                            Some(if faces(a.1) { a } else { b })
                         }
+                        [Some(a), Some(b)] => Some(if a.0 < b.0 { a } else { b }),
+                        [a, b] => a.or(b),
+                    };
+                    match nearest {
+                        // Only the front of a hit leaf sends.
+                        Some((_, l)) if faces(l) => {
+                            let b = mean(nodes.exitance[l] - nodes.emission[l].as_dvec3());
+                            g += b;
+                            per_object[objects_all.len() + object_of(l)] += b / RAYS as f64;
+                        }
+                        Some(_) => {}
+                        None => escaped += 1,
                     }
                 }
                 if std::env::var("GATHERED_DETAIL").is_ok() {
@@ -765,17 +845,26 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 } else {
                     1
                 };
-                (bin, nodes.open_area[e] as f64, by_kind, g / RAYS as f64)
+                let open = nodes.open_area[e] as f64;
+                {
+                    let mut sums = by_object.lock().unwrap();
+                    for (o, v) in per_object.iter().enumerate() {
+                        sums[o] += open * v;
+                    }
+                }
+                (bin, open, by_kind, g / RAYS as f64, escaped as f64 / RAYS as f64, directional)
             })
             .collect();
         println!(
             "object {name}: Σ A·G (W) from the links (element, shares, far arrival, near arrival, uniform) vs rays"
         );
         for (bin, label) in ["facing down", "sideways", "facing up"].iter().enumerate() {
-            let (mut a, mut kinds, mut rays) = (0.0, [0.0f64; 5], 0.0);
-            for (b, area, k, g) in &rows {
+            let (mut a, mut kinds, mut rays, mut open, mut directional) = (0.0, [0.0f64; 5], 0.0, 0.0, 0.0);
+            for (b, area, k, g, escaped, dir) in &rows {
                 if *b == bin {
                     a += area;
+                    directional += area * dir;
+                    open += area * escaped;
                     for i in 0..5 {
                         kinds[i] += area * k[i];
                     }
@@ -784,13 +873,30 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
             }
             let links_total: f64 = kinds.iter().sum();
             println!(
-                "  {label:>11} (area {a:.3}): links {links_total:.4} = {:.4} + {:.4} + {:.4} + {:.4} + {:.4}; rays {rays:.4} ({:+.1}%)",
+                "  {label:>11} (area {a:.3}): links {links_total:.4} = {:.4} + {:.4} + {:.4} + {:.4} + {:.4}; rays {rays:.4} ({:+.1}%); rays escaping {:.1}%; directional cluster sources {:.4} ({:+.1}%)",
                 kinds[0],
                 kinds[1],
                 kinds[2],
                 kinds[3],
                 kinds[4],
-                100.0 * (links_total / rays - 1.0)
+                100.0 * (links_total / rays - 1.0),
+                100.0 * open / a.max(1e-30),
+                directional,
+                100.0 * (directional / rays - 1.0)
+            );
+        }
+        let sums = by_object.into_inner().unwrap();
+        let n = objects_all.len();
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| (sums[n + b] - sums[b]).abs().total_cmp(&(sums[n + a] - sums[a]).abs()));
+        println!("  by source object (links with directional cluster sources vs rays), largest differences first:");
+        for &o in order.iter().take(15) {
+            println!(
+                "    {:>10}: links {:.4} W, rays {:.4} W ({:+.4})",
+                objects_all[o],
+                sums[o],
+                sums[n + o],
+                sums[o] - sums[n + o]
             );
         }
     }
@@ -967,4 +1073,178 @@ fn radiosity_leaves(nodes: &radray::radiosity::hierarchy::nodes::Nodes, node: us
             stack.extend(nodes.children(n));
         }
     }
+}
+
+/// The `--unlinked` report.
+fn unlinked(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
+    use radray::radiosity::hierarchy::visibility::triangle_point;
+    use radray::transport::hit::leave_surface;
+    use rayon::prelude::*;
+    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
+    let mut set = rustc_hash::FxHashSet::default();
+    for r in 0..links.offsets.len().saturating_sub(1) {
+        for k in links.range(r) {
+            set.insert((r as u32, links.source[k]));
+        }
+    }
+    let ancestors = |n: usize| {
+        let mut out = Vec::new();
+        let mut up = n as u32;
+        while up != u32::MAX {
+            out.push(up);
+            up = nodes.parent[up as usize];
+        }
+        out
+    };
+    let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
+    let front: Vec<usize> = leaves.iter().copied().filter(|&n| !inputs.back[nodes.input[n] as usize]).collect();
+    let back: Vec<usize> = leaves.iter().copied().filter(|&n| inputs.back[nodes.input[n] as usize]).collect();
+    let accel_of = |sheet: &[usize]| {
+        let positions: Vec<glam::Vec3> = sheet.iter().flat_map(|&n| nodes.corners[n]).collect();
+        let triangles: Vec<[u32; 3]> = (0..sheet.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        radray::accel::Accel::build(&positions, &triangles)
+    };
+    let (accel, accel_back) = (accel_of(&front), accel_of(&back));
+    let offset = scene.diagonal() * 1e-5;
+    let object = |n: usize| &scene.surfaces[inputs.surface[nodes.input[n] as usize] as usize].object;
+    let mut objects: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
+    objects.sort();
+    objects.dedup();
+    let mine: Vec<usize> = leaves.iter().copied().filter(|&n| object(n) == name && nodes.open_area[n] > 0.0).collect();
+    let detail: usize = std::env::var("UNLINKED_DETAIL").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
+    const RAYS: usize = 64;
+    // Per receiver leaf: [linked B·A, unlinked B·A, linked rays, unlinked rays, then unlinked B·A by object], and
+    // the unlinked pairs for the detail.
+    let rows: Vec<(Vec<f64>, Vec<(usize, usize)>)> = mine
+        .par_iter()
+        .map(|&e| {
+            let mut out = vec![0.0f64; 4 + objects.len()];
+            let mut pairs = Vec::new();
+            let up = ancestors(e);
+            let mut state = radray::rng::splitmix64(e as u64 ^ 0xc0ffee);
+            let mut uniform = || {
+                state = radray::rng::splitmix64(state);
+                (state >> 40) as f32 / (1u64 << 24) as f32
+            };
+            let n = nodes.normal[e];
+            let (t, b) = n.any_orthonormal_pair();
+            let w = nodes.open_area[e] as f64 / RAYS as f64;
+            for _ in 0..RAYS {
+                let p = triangle_point(&nodes.corners[e], uniform(), uniform());
+                let (u1, u2) = (uniform(), uniform());
+                let r = u1.sqrt();
+                let phi = std::f32::consts::TAU * u2;
+                let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+                let origin = leave_surface(p, n, offset);
+                let hits = [
+                    accel.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, front[h.triangle as usize])),
+                    accel_back.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, back[h.triangle as usize])),
+                ];
+                let faces = |l: usize| nodes.normal[l].dot(d) < 0.0;
+                let nearest = match hits {
+                    [Some(a), Some(b)] if (a.0 - b.0).abs() <= 1e-4 * a.0.max(b.0) => {
+                        Some(if faces(a.1) { a } else { b })
+                    }
+                    [Some(a), Some(b)] => Some(if a.0 < b.0 { a } else { b }),
+                    [a, b] => a.or(b),
+                };
+                let Some((_, l)) = nearest.filter(|&(_, l)| faces(l)) else { continue };
+                let bl = nodes.exitance_mean[l] - mean_channel(nodes.emission[l].as_dvec3());
+                let theirs = ancestors(l);
+                let linked = up.iter().any(|&a| theirs.iter().any(|&c| set.contains(&(a, c))));
+                if linked {
+                    out[0] += w * bl;
+                    out[2] += 1.0;
+                } else {
+                    out[1] += w * bl;
+                    out[3] += 1.0;
+                    let o = objects.iter().position(|m| m == object(l)).unwrap();
+                    out[4 + o] += w * bl;
+                    if pairs.len() < 2 {
+                        pairs.push((e, l));
+                    }
+                }
+            }
+            (out, pairs)
+        })
+        .collect();
+    let mut total = vec![0.0f64; 4 + objects.len()];
+    let mut pairs = Vec::new();
+    for (row, p) in rows {
+        for i in 0..total.len() {
+            total[i] += row[i];
+        }
+        pairs.extend(p);
+    }
+    println!(
+        "object {name}: {} leaves; indirect A·G the rays read: linked {:.4} W ({} rays), unlinked {:.4} W ({} rays, {:.1}% of the power)",
+        mine.len(),
+        total[0],
+        total[2],
+        total[1],
+        total[3],
+        100.0 * total[1] / (total[0] + total[1]).max(1e-30)
+    );
+    let mut by_object: Vec<(f64, &String)> = objects.iter().enumerate().map(|(o, m)| (total[4 + o], m)).collect();
+    by_object.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (w, m) in by_object.iter().take(12) {
+        println!("  unlinked from {m}: {w:.4} W");
+    }
+    let describe = |n: u32| {
+        let n = n as usize;
+        format!(
+            "{}{} L{} A {:.3} r {:.2}",
+            n,
+            if nodes.is_cluster[n] { "c" } else { "e" },
+            nodes.level[n],
+            nodes.area[n],
+            nodes.radius[n]
+        )
+    };
+    for &(e, l) in pairs.iter().step_by((pairs.len() / detail.max(1)).max(1)).take(detail) {
+        println!(
+            "pair {e} ({}, back {}) <- {l} ({}, back {}), d {:.3}, B_l {:.4}",
+            object(e),
+            inputs.back[nodes.input[e] as usize],
+            object(l),
+            inputs.back[nodes.input[l] as usize],
+            nodes.centre[e].distance(nodes.centre[l]),
+            nodes.exitance_mean[l]
+        );
+        let (ue, ul) = (ancestors(e), ancestors(l));
+        // The lowest common ancestor and the two chains up to it.
+        let common = ue.iter().position(|a| ul.contains(a)).unwrap_or(ue.len() - 1);
+        let lca = ue[common];
+        let cl = ul.iter().position(|&a| a == lca).unwrap_or(ul.len() - 1);
+        println!("  receiver chain: {}", ue[..=common].iter().map(|&a| describe(a)).collect::<Vec<_>>().join(" < "));
+        println!("  source chain:   {}", ul[..=cl].iter().map(|&a| describe(a)).collect::<Vec<_>>().join(" < "));
+        // Links out of each receiver ancestor into the source's subtree side: the sources that are
+        // on the source chain's siblings (what the refinement did at each level).
+        for &a in &ue[..=common] {
+            let around: Vec<String> = links
+                .range(a as usize)
+                .filter(|&k| {
+                    let s = links.source[k];
+                    ul[..=cl].contains(&s) || ul[..=cl].contains(&nodes.parent[s as usize])
+                })
+                .map(|k| format!("{} F {:.2e}", describe(links.source[k]), links.form_factor[k]))
+                .collect();
+            if !around.is_empty() {
+                println!("    links of {a} to the source chain or its children: {}", around.join("; "));
+            }
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+fn mean_channel(v: DVec3) -> f64 {
+    (v.x + v.y + v.z) / 3.0
 }
