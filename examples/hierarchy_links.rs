@@ -267,14 +267,7 @@ const KINDS: [&str; 5] = ["element", "member shares", "far arrival", "near arriv
 fn object_breakdown(scene: &radray::scene::SceneDescription, objects: &[String]) -> ExitCode {
     use radray::radiosity::hierarchy::form_factor::quadrature_points;
     use radray::transport::hit::leave_surface;
-    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
-    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
     let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
     let scales = ArrivalScales::new(nodes, links);
     // The scene's triangles for visibility rays.
@@ -436,13 +429,7 @@ fn link_bias(
     use radray::radiosity::hierarchy::visibility::{sampled_form_factor, VisibilityContext};
     use rayon::prelude::*;
     let params = radray::radiosity::hierarchical::hierarchy_params(scene);
-    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
     let (nodes, links) = (structure.nodes(), structure.links());
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     for s in &scene.surfaces {
@@ -558,14 +545,7 @@ fn link_bias(
 fn sent_by_object(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
     use radray::radiosity::hierarchy::visibility::triangle_point;
     use radray::transport::hit::leave_surface;
-    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
-    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
     let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
     let mut objects: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
     objects.sort();
@@ -660,30 +640,13 @@ fn sent_by_object(scene: &radray::scene::SceneDescription, name: &str) -> ExitCo
 
 /// The `--gathered` report.
 fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String]) -> ExitCode {
-    use radray::radiosity::hierarchy::visibility::triangle_point;
-    use radray::transport::hit::leave_surface;
     use rayon::prelude::*;
-    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
-    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
     let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
     let scales = ArrivalScales::new(nodes, links);
     let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
     let front: Vec<usize> = leaves.iter().copied().filter(|&n| !inputs.back[nodes.input[n] as usize]).collect();
-    let back: Vec<usize> = leaves.iter().copied().filter(|&n| inputs.back[nodes.input[n] as usize]).collect();
-    // One acceleration structure per side: a two-sided sheet's front and back leaves coincide, and a
-    // ray sees the one that faces it.
-    let accel_of = |sheet: &[usize]| {
-        let positions: Vec<glam::Vec3> = sheet.iter().flat_map(|&n| nodes.corners[n]).collect();
-        let triangles: Vec<[u32; 3]> = (0..sheet.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-        radray::accel::Accel::build(&positions, &triangles)
-    };
-    let (accel, accel_back) = (accel_of(&front), accel_of(&back));
+    let tracer = LeafTracer::new(nodes, inputs, &leaves);
     let offset = scene.diagonal() * 1e-5;
     let mean = |v: DVec3| (v.x + v.y + v.z) / 3.0;
     let mut objects_all: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
@@ -780,37 +743,17 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 };
                 const RAYS: usize = 256;
                 let n = nodes.normal[e];
-                let (t, b) = n.any_orthonormal_pair();
                 let (mut g, mut escaped) = (0.0, 0u32);
                 for _ in 0..RAYS {
-                    let p = triangle_point(&nodes.corners[e], uniform(), uniform());
-                    let (u1, u2) = (uniform(), uniform());
-                    let r = u1.sqrt();
-                    let phi = std::f32::consts::TAU * u2;
-                    let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
-                    let origin = leave_surface(p, n, offset);
-                    let hits = [
-                        accel.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, front[h.triangle as usize])),
-                        accel_back.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, back[h.triangle as usize])),
-                    ];
-                    // The nearest hit; of two at the same distance (a two-sided sheet), the one facing the ray.
-                    let faces = |l: usize| nodes.normal[l].dot(d) < 0.0;
-                    let nearest = match hits {
-                        [Some(a), Some(b)] if (a.0 - b.0).abs() <= 1e-4 * a.0.max(b.0) => {
-                            Some(if faces(a.1) { a } else { b })
-                        }
-                        [Some(a), Some(b)] => Some(if a.0 < b.0 { a } else { b }),
-                        [a, b] => a.or(b),
-                    };
-                    match nearest {
+                    match tracer.cosine_ray(nodes, e, offset, &mut uniform) {
                         // Only the front of a hit leaf sends.
-                        Some((_, l)) if faces(l) => {
+                        RayEnd::Facing(l) => {
                             let b = mean(nodes.exitance[l] - nodes.emission[l].as_dvec3());
                             g += b;
                             per_object[objects_all.len() + object_of(l)] += b / RAYS as f64;
                         }
-                        Some(_) => {}
-                        None => escaped += 1,
+                        RayEnd::Behind => {}
+                        RayEnd::Escaped => escaped += 1,
                     }
                 }
                 if std::env::var("GATHERED_DETAIL").is_ok() {
@@ -906,30 +849,10 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
 /// The `--coverage` report.
 fn coverage(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
     use rayon::prelude::*;
-    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
-    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
     let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
-    let mut set = rustc_hash::FxHashSet::default();
-    for r in 0..links.offsets.len().saturating_sub(1) {
-        for k in links.range(r) {
-            set.insert((r as u32, links.source[k]));
-        }
-    }
-    let ancestors = |n: usize| {
-        let mut out = Vec::new();
-        let mut up = n as u32;
-        while up != u32::MAX {
-            out.push(up);
-            up = nodes.parent[up as usize];
-        }
-        out
-    };
+    let set = linked_pairs(links);
+    let ancestors = |n: usize| ancestors_of(nodes, n);
     let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
     let object = |n: usize| &scene.surfaces[inputs.surface[nodes.input[n] as usize] as usize].object;
     let mine: Vec<usize> = leaves.iter().copied().filter(|&n| object(n) == name && nodes.open_area[n] > 0.0).collect();
@@ -1077,42 +1000,13 @@ fn radiosity_leaves(nodes: &radray::radiosity::hierarchy::nodes::Nodes, node: us
 
 /// The `--unlinked` report.
 fn unlinked(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
-    use radray::radiosity::hierarchy::visibility::triangle_point;
-    use radray::transport::hit::leave_surface;
     use rayon::prelude::*;
-    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
-    let (_, structure) = match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
     let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
-    let mut set = rustc_hash::FxHashSet::default();
-    for r in 0..links.offsets.len().saturating_sub(1) {
-        for k in links.range(r) {
-            set.insert((r as u32, links.source[k]));
-        }
-    }
-    let ancestors = |n: usize| {
-        let mut out = Vec::new();
-        let mut up = n as u32;
-        while up != u32::MAX {
-            out.push(up);
-            up = nodes.parent[up as usize];
-        }
-        out
-    };
+    let set = linked_pairs(links);
+    let ancestors = |n: usize| ancestors_of(nodes, n);
     let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
-    let front: Vec<usize> = leaves.iter().copied().filter(|&n| !inputs.back[nodes.input[n] as usize]).collect();
-    let back: Vec<usize> = leaves.iter().copied().filter(|&n| inputs.back[nodes.input[n] as usize]).collect();
-    let accel_of = |sheet: &[usize]| {
-        let positions: Vec<glam::Vec3> = sheet.iter().flat_map(|&n| nodes.corners[n]).collect();
-        let triangles: Vec<[u32; 3]> = (0..sheet.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-        radray::accel::Accel::build(&positions, &triangles)
-    };
-    let (accel, accel_back) = (accel_of(&front), accel_of(&back));
+    let tracer = LeafTracer::new(nodes, inputs, &leaves);
     let offset = scene.diagonal() * 1e-5;
     let object = |n: usize| &scene.surfaces[inputs.surface[nodes.input[n] as usize] as usize].object;
     let mut objects: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
@@ -1123,7 +1017,7 @@ fn unlinked(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
     const RAYS: usize = 64;
     // Per receiver leaf: [linked B·A, unlinked B·A, linked rays, unlinked rays, then unlinked B·A by object], and
     // the unlinked pairs for the detail.
-    let rows: Vec<(Vec<f64>, Vec<(usize, usize)>)> = mine
+    let rows: Vec<UnlinkedRow> = mine
         .par_iter()
         .map(|&e| {
             let mut out = vec![0.0f64; 4 + objects.len()];
@@ -1134,29 +1028,9 @@ fn unlinked(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
                 state = radray::rng::splitmix64(state);
                 (state >> 40) as f32 / (1u64 << 24) as f32
             };
-            let n = nodes.normal[e];
-            let (t, b) = n.any_orthonormal_pair();
             let w = nodes.open_area[e] as f64 / RAYS as f64;
             for _ in 0..RAYS {
-                let p = triangle_point(&nodes.corners[e], uniform(), uniform());
-                let (u1, u2) = (uniform(), uniform());
-                let r = u1.sqrt();
-                let phi = std::f32::consts::TAU * u2;
-                let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
-                let origin = leave_surface(p, n, offset);
-                let hits = [
-                    accel.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, front[h.triangle as usize])),
-                    accel_back.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, back[h.triangle as usize])),
-                ];
-                let faces = |l: usize| nodes.normal[l].dot(d) < 0.0;
-                let nearest = match hits {
-                    [Some(a), Some(b)] if (a.0 - b.0).abs() <= 1e-4 * a.0.max(b.0) => {
-                        Some(if faces(a.1) { a } else { b })
-                    }
-                    [Some(a), Some(b)] => Some(if a.0 < b.0 { a } else { b }),
-                    [a, b] => a.or(b),
-                };
-                let Some((_, l)) = nearest.filter(|&(_, l)| faces(l)) else { continue };
+                let RayEnd::Facing(l) = tracer.cosine_ray(nodes, e, offset, &mut uniform) else { continue };
                 let bl = nodes.exitance_mean[l] - mean_channel(nodes.emission[l].as_dvec3());
                 let theirs = ancestors(l);
                 let linked = up.iter().any(|&a| theirs.iter().any(|&c| set.contains(&(a, c))));
@@ -1247,4 +1121,114 @@ fn unlinked(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
 
 fn mean_channel(v: DVec3) -> f64 {
     (v.x + v.y + v.z) / 3.0
+}
+
+/// Every (receiver, source) pair of the links.
+fn linked_pairs(links: &radray::radiosity::hierarchy::links::Links) -> rustc_hash::FxHashSet<(u32, u32)> {
+    let mut set = rustc_hash::FxHashSet::default();
+    for r in 0..links.offsets.len().saturating_sub(1) {
+        for k in links.range(r) {
+            set.insert((r as u32, links.source[k]));
+        }
+    }
+    set
+}
+
+/// Node `n` and its ancestors up to the root.
+fn ancestors_of(nodes: &radray::radiosity::hierarchy::nodes::Nodes, n: usize) -> Vec<u32> {
+    let mut out = Vec::new();
+    let mut up = n as u32;
+    while up != u32::MAX {
+        out.push(up);
+        up = nodes.parent[up as usize];
+    }
+    out
+}
+
+/// Where a cosine ray from a leaf ends (`LeafTracer::cosine_ray`).
+enum RayEnd {
+    /// On the leaf that faces the ray.
+    Facing(usize),
+    /// On the back of a one-sided leaf.
+    Behind,
+    /// Nowhere: it left the scene.
+    Escaped,
+}
+
+/// Rays against the leaves, one acceleration structure per sheet: a two-sided sheet's front and back
+/// leaves coincide, and a ray sees the one that faces it.
+struct LeafTracer {
+    front: Vec<usize>,
+    back: Vec<usize>,
+    accel_front: radray::accel::Accel,
+    accel_back: radray::accel::Accel,
+}
+
+impl LeafTracer {
+    fn new(
+        nodes: &radray::radiosity::hierarchy::nodes::Nodes,
+        inputs: &radray::radiosity::hierarchy::clusters::InputTriangles,
+        leaves: &[usize],
+    ) -> LeafTracer {
+        let (back, front): (Vec<usize>, Vec<usize>) =
+            leaves.iter().copied().partition(|&n| inputs.back[nodes.input[n] as usize]);
+        let accel_of = |sheet: &[usize]| {
+            let positions: Vec<glam::Vec3> = sheet.iter().flat_map(|&n| nodes.corners[n]).collect();
+            let triangles: Vec<[u32; 3]> = (0..sheet.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+            radray::accel::Accel::build(&positions, &triangles)
+        };
+        let (accel_front, accel_back) = (accel_of(&front), accel_of(&back));
+        LeafTracer { front, back, accel_front, accel_back }
+    }
+
+    /// A cosine-distributed ray from a uniform point of leaf `e` (moved `offset` off it): the nearest
+    /// hit, and of two at the same distance (a two-sided sheet) the one facing the ray.
+    fn cosine_ray(
+        &self,
+        nodes: &radray::radiosity::hierarchy::nodes::Nodes,
+        e: usize,
+        offset: f32,
+        uniform: &mut impl FnMut() -> f32,
+    ) -> RayEnd {
+        use radray::radiosity::hierarchy::visibility::triangle_point;
+        use radray::transport::hit::leave_surface;
+        let n = nodes.normal[e];
+        let (t, b) = n.any_orthonormal_pair();
+        let p = triangle_point(&nodes.corners[e], uniform(), uniform());
+        let (u1, u2) = (uniform(), uniform());
+        let r = u1.sqrt();
+        let phi = std::f32::consts::TAU * u2;
+        let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+        let origin = leave_surface(p, n, offset);
+        let hits = [
+            self.accel_front.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, self.front[h.triangle as usize])),
+            self.accel_back.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, self.back[h.triangle as usize])),
+        ];
+        let faces = |l: usize| nodes.normal[l].dot(d) < 0.0;
+        let nearest = match hits {
+            [Some(a), Some(b)] if (a.0 - b.0).abs() <= 1e-4 * a.0.max(b.0) => Some(if faces(a.1) { a } else { b }),
+            [Some(a), Some(b)] => Some(if a.0 < b.0 { a } else { b }),
+            [a, b] => a.or(b),
+        };
+        match nearest {
+            Some((_, l)) if faces(l) => RayEnd::Facing(l),
+            Some(_) => RayEnd::Behind,
+            None => RayEnd::Escaped,
+        }
+    }
+}
+
+/// One receiver leaf's sums in the `--unlinked` report, and its first unlinked pairs.
+type UnlinkedRow = (Vec<f64>, Vec<(usize, usize)>);
+
+/// The scene solved at its own parameters, or `None` with the error printed.
+fn solved(scene: &radray::scene::SceneDescription) -> Option<radray::radiosity::hierarchy::LinkStructure> {
+    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+    match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
+        Ok((_, structure)) => Some(structure),
+        Err(e) => {
+            eprintln!("{e}");
+            None
+        }
+    }
 }
