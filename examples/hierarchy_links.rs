@@ -499,7 +499,7 @@ fn link_bias(
                     5
                 }
             };
-            let (mut reference, _) = sampled_form_factor(&ctx, nodes, r, s);
+            let mut reference = sampled_form_factor(&ctx, nodes, r, s).form_factor;
             let w = nodes.area[r] as f64 * nodes.exitance_mean[s];
             if std::env::var("LINK_BIAS_LEAVES").is_ok() && nodes.exitance_mean[s] > 0.0 {
                 // The transfer with each source leaf's own exitance: Σ_c F_Rc B_c / B_S.

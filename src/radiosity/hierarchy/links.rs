@@ -7,7 +7,7 @@ use super::form_factor::{
     triangle_to_polygon,
 };
 use super::nodes::Nodes;
-use super::visibility::{link_visibility, sampled_form_factor, Visibility, VisibilityContext};
+use super::visibility::{link_visibility, sampled_form_factor, visibility_spread, Visibility, VisibilityContext};
 
 /// A link while refining: receiver, source, form factor and its error spread.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -108,10 +108,11 @@ impl Links {
 /// so a dark link (B_S = 0 or ρ_R = 0) is never refined, and the number of links a scene needs does not
 /// grow with its triangle count: small receivers carry little power.
 ///
-/// Summed over all links it is the global error estimate; refinement never raises that sum at a fixed
-/// exitance, because a child link's spread is capped by its parent's (receiver split: Σ A_r ρ_r = A_R
-/// ρ_R, ρ being area-averaged) or by its share A_s/A_S of it (source split or self-link expansion: B_S
-/// is the area-weighted mean of the children's B).
+/// Summed over all links it is the global error estimate. Splitting a far or element link does not
+/// raise that sum at a fixed exitance, because a child link's spread is capped by its parent's
+/// (receiver split: Σ A_r ρ_r = A_R ρ_R, ρ being area-averaged) or by its share A_s/A_S of it
+/// (source split: B_S is the area-weighted mean of the children's B). A near child measures its
+/// own deviation (`near_estimate`) and may raise it: its parent's spread understated the error.
 ///
 /// A receiver with no open area (`Nodes::open_area`: all of it inside an object resting on it) has
 /// error 0: nothing its links bring lands (`gather::on_open_part`), so it is never refined.
@@ -146,8 +147,9 @@ pub fn source_variation_power(nodes: &Nodes, receiver: usize, source: usize, coe
 }
 
 /// Whether a link is *near*: a cluster's self-link, or a link with a cluster end that is not
-/// `admissible` for the cluster formula. Near links are estimated by sampling
-/// (`visibility::sampled_form_factor`) and their error is the bound `near_spread`.
+/// `admissible` for the cluster formula. Near links are estimated leaf pair by leaf pair or by
+/// sampling (`near_estimate`); their error is the bound `near_spread` capped by the parent link's
+/// share, or the estimate's deviation over the receiver where that is larger (`estimate`).
 pub fn is_near(nodes: &Nodes, receiver: usize, source: usize) -> bool {
     receiver == source || !admissible(nodes, receiver, source)
 }
@@ -167,7 +169,7 @@ pub fn near_spread(nodes: &Nodes, receiver: usize, source: usize) -> f32 {
 }
 
 /// The total error of a link as refinement judges it (W): `link_error_power` plus
-/// `source_variation_power`, the latter with the form factor of a far link or the bound of a near one.
+/// `source_variation_power`, the latter with the form factor of a far link or the spread of a near one.
 pub fn refinement_error(nodes: &Nodes, link: &LinkRecord) -> f64 {
     let (r, s) = (link.receiver as usize, link.source as usize);
     let coefficient = if is_near(nodes, r, s) { link.spread } else { link.form_factor };
@@ -252,9 +254,14 @@ pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
 ///   `cluster_form_factor_bound` times max(V, 1/(N+1)): the approximation itself is the error;
 ///   plus `push_spread` (a cluster receiver partly hidden from the source), not capped.
 /// - Near links kept with an estimated F also add `near_push_spread`.
-/// - Near links (`is_near`): ΔF = `near_spread`. When the link's error with that bound is above
-///   `threshold_w` it is about to be split and F is not estimated (NaN, so that a kept one is caught);
-///   otherwise F = `visibility::sampled_form_factor`, and `None` when no sample pair faces each other.
+/// - Near links (`is_near`): the bound b = `near_spread` capped at `spread_cap`. When the link's
+///   error with it is above `threshold_w` it is about to be split and F is not estimated (NaN, so
+///   that a kept one is caught). Otherwise F and the deviation D over the receiver come from
+///   `near_estimate` (leaf pairs or rays), and ΔF = max(min(b, cap), min(b, D)): until session 19
+///   ΔF was the capped bound alone, and a near link under one whose spread was small inherited that
+///   small error and was kept however much F varied over it (Sponza's nave floor under building-
+///   sized clusters, docs/accuracy.md). D alone in place of the capped bound was worse in every
+///   room measured (session 19). `None` when no sample pair faces each other.
 pub fn estimate(
     nodes: &Nodes,
     ctx: &VisibilityContext,
@@ -299,8 +306,10 @@ pub fn estimate(
         if let Some(spread) = near_split_pending(nodes, receiver, source, spread_cap, threshold_w) {
             return Some((f32::NAN, spread));
         }
-        let spread = near_spread(nodes, receiver, source).min(spread_cap);
-        let f = near_form_factor(nodes, ctx, receiver, source)?;
+        let bound = near_spread(nodes, receiver, source);
+        let estimate = near_estimate(nodes, ctx, receiver, source)?;
+        let spread = bound.min(spread_cap).max(estimate.deviation.min(bound));
+        let f = estimate.form_factor;
         return Some((f, spread + near_push_spread(nodes, ctx, receiver, source, f)));
     }
     let (cr, cs) = (nodes.centre[receiver], nodes.centre[source]);
@@ -423,28 +432,59 @@ pub const EXACT_NEAR_PAIRS: usize = 64;
 ///   every pair's F is 0.
 /// - Larger: `visibility::sampled_form_factor`; `None` when no sample pair faces each other.
 pub fn near_form_factor(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source: usize) -> Option<f32> {
+    near_estimate(nodes, ctx, receiver, source).map(|e| e.form_factor)
+}
+
+/// A near link's form factor and its deviation over the receiver (what a uniform F_RS gets wrong).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearEstimate {
+    pub form_factor: f32,
+    pub deviation: f32,
+}
+
+/// `near_form_factor` with the error a uniform F_RS makes over the receiver, as a form factor:
+///
+/// - leaf pairs: ΔF = V · Σ_r A_r (|F_r − F̄| + δF_r) / A_R + F̄ · `visibility_spread`(V), F_r =
+///   Σ_s F_elem(r ← s) the unoccluded form factor of receiver leaf r, F̄ their area mean and δF_r the
+///   element estimator's quadrature error (the variation inside a leaf is the leaf's own error);
+/// - rays: `visibility::receiver_deviation` of the samples (`SampledFormFactor::deviation`).
+///
+/// Refinement reads it as the link's error where it is above the capped bound (`estimate`): a near
+/// pair is split where F varies over the receiver (a concave corner inside a cluster, a floor
+/// beneath building-sized clusters), however small a spread its parent link had.
+pub fn near_estimate(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, source: usize) -> Option<NearEstimate> {
     let (mut rs, mut ss) = (Vec::new(), Vec::new());
     let small = leaves_below(nodes, receiver, EXACT_NEAR_PAIRS, &mut rs)
         && leaves_below(nodes, source, EXACT_NEAR_PAIRS, &mut ss)
         && rs.len() * ss.len() <= EXACT_NEAR_PAIRS;
     if !small {
-        let (f, facing) = sampled_form_factor(ctx, nodes, receiver, source);
-        return (facing > 0).then_some(f as f32);
+        let sampled = sampled_form_factor(ctx, nodes, receiver, source);
+        return (sampled.facing > 0)
+            .then_some(NearEstimate { form_factor: sampled.form_factor as f32, deviation: sampled.deviation as f32 });
     }
-    let mut sum = 0.0f64;
+    // Per receiver leaf: its area, Σ_s F_elem(r ← s) and Σ_s of the quadrature errors.
+    let mut per_leaf = Vec::with_capacity(rs.len());
     for &r in &rs {
+        let (mut f_r, mut error_r) = (0.0f64, 0.0f64);
         for &s in &ss {
             if r != s {
-                let (f, _) = element_to_element(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
-                sum += nodes.area[r] as f64 * f;
+                let (f, error) = element_to_element(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
+                f_r += f;
+                error_r += error;
             }
         }
+        per_leaf.push((nodes.area[r] as f64, f_r, error_r));
     }
-    if !(sum > 0.0) {
+    let area = nodes.area[receiver] as f64;
+    let sum: f64 = per_leaf.iter().map(|&(a, f, _)| a * f).sum();
+    if !(sum > 0.0) || !(area > 0.0) {
         return None;
     }
+    let mean = sum / area;
+    let deviation: f64 = per_leaf.iter().map(|&(a, f, error)| a * ((f - mean).abs() + error)).sum::<f64>() / area;
     let v = link_visibility(ctx, nodes, receiver, source).visible as f64;
-    Some((v * sum / nodes.area[receiver] as f64).min(1.0) as f32)
+    let deviation = v * deviation + mean * visibility_spread(v, ctx.rays);
+    Some(NearEstimate { form_factor: (v * mean).min(1.0) as f32, deviation: deviation as f32 })
 }
 
 /// What `near_form_factor` of link (receiver ← source) reads of the subdivision below its ends: when

@@ -64,7 +64,8 @@ pub struct RefineOutcome {
 }
 
 /// A link to be estimated: its ends, and the cap on its error spread inherited from its parent link
-/// (the parent's spread times the child's share), which keeps the total error from growing.
+/// (the parent's spread times the child's share), which keeps the total error from growing. A near
+/// link's measured deviation may exceed it (`links::estimate`).
 #[derive(Clone, Copy)]
 struct Pending {
     receiver: u32,

@@ -341,8 +341,8 @@ pub fn towards_probability(nodes: &Nodes, node: usize, x: Vec3, element: usize) 
 /// sample whose y_k does not (it lies in the part of t_k the clipping removed) takes the
 /// kernel-weighted visibility of the others, V̄ = Σ F_k V_k / Σ F_k (1 if there are none). Unbiased
 /// without occluders. The estimate is capped at 1 (F_RS ≤ 1).
-/// Returns (F, samples with F(x_k → t_k) > 0): 0 means the ends cannot exchange light at all (a
-/// convex object's own cluster, a flat cluster), and the link can be dropped.
+/// Also returns the samples with F(x_k → t_k) > 0 and the estimate's deviation over the receiver
+/// (`SampledFormFactor`).
 ///
 /// Until session 15 t_k was picked by area (p = A_t/A_S): where the ends touch, F(x → t)·A_S/A_t is
 /// up to A_S/A_t for an x beside t, a heavy tail that 8 samples seldom reach and that the cap at 1
@@ -356,13 +356,20 @@ pub fn towards_probability(nodes: &Nodes, node: usize, x: Vec3, element: usize) 
 /// 18–42% (tests/hierarchy.rs), which darkened cornell_original's floor between the blocks; it took
 /// 2 × `ctx.rays` pairs, which the bounded kernel does not need (seeds 0–7 of cornell_original: mean
 /// relMSE 0.00071 at N, 0.00074 at 2N, docs/accuracy.md).
-pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, source: usize) -> (f64, u32) {
+pub fn sampled_form_factor(
+    ctx: &VisibilityContext,
+    nodes: &Nodes,
+    receiver: usize,
+    source: usize,
+) -> SampledFormFactor {
     let n = ctx.rays.max(1);
     let (at_receiver, at_source) = EndPattern::pair(link_seed(ctx.seed ^ 0x5eed_f0f0, nodes, receiver, source));
     // Σ F_k V_k and Σ F_k over samples with a visibility ray; Σ F_k over samples without one.
     let (mut seen, mut tested, mut untested) = (0.0f64, 0.0f64, 0.0f64);
     let mut facing = 0u32;
     let mut clear = None;
+    // f_k, unoccluded (0 where x_k faces none of the source), for the deviation.
+    let mut unoccluded_f = Vec::with_capacity(n as usize);
     for k in 0..n {
         let (x, nx) = sample_point(nodes, receiver, at_receiver.point(k));
         let [u, v] = at_source.point(k);
@@ -376,6 +383,7 @@ pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usi
         if !(f > 0.0) {
             continue;
         }
+        unoccluded_f.push(f);
         facing += 1;
         let (y, ny) = (triangle_point(corners, u as f32, v as f32), nodes.normal[t]);
         let d = y - x;
@@ -389,12 +397,73 @@ pub fn sampled_form_factor(ctx: &VisibilityContext, nodes: &Nodes, receiver: usi
         }
     }
     let mean_visibility = if tested > 0.0 { seen / tested } else { 1.0 };
-    (((seen + untested * mean_visibility) / n as f64).min(1.0), facing)
+    let form_factor = ((seen + untested * mean_visibility) / n as f64).min(1.0);
+    let unoccluded_mean = (tested + untested) / n as f64;
+    let deviation = mean_visibility * receiver_deviation(&unoccluded_f, n as usize)
+        + unoccluded_mean * visibility_spread(mean_visibility, n);
+    SampledFormFactor { form_factor, facing, deviation }
+}
+
+/// The error of a visible fraction V measured with N rays, as a fraction of the unoccluded form
+/// factor: 2 max(min(V, 1 − V), 1/(N + 1)). A receiver partly in shadow gets one mean irradiance
+/// (2 min(V, 1 − V), the term of an element link in `links::estimate`), and N rays that all agree
+/// still leave a gap or a thin occluder of about 1/(N + 1) unseen (a door gap that no ray of a
+/// near link passed would otherwise be kept dark with no error at all).
+pub fn visibility_spread(visible: f64, rays: u32) -> f64 {
+    2.0 * visible.min(1.0 - visible).max(1.0 / (rays as f64 + 1.0))
+}
+
+/// What `sampled_form_factor` measures of a near link.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampledFormFactor {
+    /// F_RS, visibility included, capped at 1.
+    pub form_factor: f64,
+    /// Samples with F(x_k → t_k) > 0: 0 means the ends cannot exchange light at all (a convex
+    /// object's own cluster, a flat cluster), and the link can be dropped.
+    pub facing: u32,
+    /// How far a uniform F_RS over the receiver is from the truth, as a form factor (a link pushes
+    /// one irradiance to all of its receiver): `receiver_deviation` of the unoccluded samples f_k
+    /// times the mean visibility V̄, plus F̄ `visibility_spread`(V̄) (F̄ the unoccluded mean).
+    pub deviation: f64,
+}
+
+/// The error of standing for the point-to-source form factors f_k (N samples, uniform over the
+/// receiver by area; `samples` holds the nonzero ones) by their mean f̄, plus the error of f̄
+/// itself:
+///
+/// ΔF = (1/N) Σ_k |f_k − f̄| + s/√N,   s² = Σ_k (f_k − f̄)² / (N − 1),
+///
+/// the mean absolute deviation being the L1 error of a constant F over the receiver, which is what
+/// a link's error power A_R ρ_R B_S ΔF (`links::link_error_power`) charges. It overstates where the
+/// source's sampling adds noise to f_k: the link is then refined sooner, never later.
+pub fn receiver_deviation(samples: &[f64], n: usize) -> f64 {
+    if n == 0 {
+        return 0.0;
+    }
+    let zeros = n.saturating_sub(samples.len()) as f64;
+    let mean = samples.iter().sum::<f64>() / n as f64;
+    let absolute = samples.iter().map(|f| (f - mean).abs()).sum::<f64>() + zeros * mean;
+    let square = samples.iter().map(|f| (f - mean).powi(2)).sum::<f64>() + zeros * mean * mean;
+    let standard_error = if n > 1 { (square / (n - 1) as f64 / n as f64).sqrt() } else { mean };
+    absolute / n as f64 + standard_error
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `receiver_deviation`: no deviation when every sample agrees; for samples half 0 and half
+    /// 2c (two halves of a receiver, one lit), the mean absolute deviation c plus the standard
+    /// error c·√(N/(N − 1))/√N of the mean.
+    #[test]
+    fn receiver_deviation_is_the_mean_absolute_deviation_plus_the_standard_error() {
+        assert_eq!(receiver_deviation(&[0.3; 8], 8), 0.0);
+        assert_eq!(receiver_deviation(&[], 8), 0.0);
+        let c = 0.2;
+        let got = receiver_deviation(&[2.0 * c; 4], 8);
+        let want = c + c * (8.0f64 / 7.0).sqrt() / 8.0f64.sqrt();
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+    }
 
     /// Points 0..2^m of an end pattern put one point in every elementary interval of area 2^−m (every
     /// 2^a × 2^(m−a) grid): the (0, m, 2)-net the visibility estimate's stratification rests on, for
