@@ -976,7 +976,7 @@ fn near_link_leaf_pair_estimator_matches_polygon_to_polygon_cases() {
 /// The near-link sampled estimator (`visibility::sampled_form_factor`: Lambert's exact form factor
 /// from a receiver point to an area-picked source element, times a ray; used by
 /// `links::near_form_factor` above 64 leaf pairs) against every polygon-to-polygon case, with the
-/// default 8 visibility rays, averaged over 64 seeds: its bias must be within 4 standard errors of
+/// default 8 visibility rays (32 samples, `NEAR_SAMPLES_PER_RAY`), averaged over 64 seeds: its bias must be within 4 standard errors of
 /// that mean.
 ///
 /// Until session 15 it was ignored, biased low where the ends touch or nearly do (session 12: parallel
@@ -988,8 +988,8 @@ fn near_link_leaf_pair_estimator_matches_polygon_to_polygon_cases() {
 /// cap at F ≤ 1 cut it off where a seed did (over 4096 seeds −2% to −7% with the cap, within 1.2%
 /// without it; all of the disks' −13%). The element is now picked by a bounded kernel towards
 /// the receiver point (`visibility::sample_element_towards`, its spheres' radii capped at √A);
-/// measured: every case within 2.9% and 1.2 standard errors (shared edges −2.8% to +0.6%, disks
-/// r 1 → 2 −1.2%).
+/// measured at 8 samples: every case within 2.9% and 1.2 standard errors (shared edges −2.8% to
+/// +0.6%, disks r 1 → 2 −1.2%); at 32 (session 19): within 3.9% and 1.6 standard errors.
 #[test]
 fn near_link_ray_estimator_is_unbiased_on_polygon_to_polygon_cases() {
     use radray::radiosity::hierarchy::links::near_form_factor;
@@ -1025,7 +1025,7 @@ fn near_link_ray_estimator_is_unbiased_on_polygon_to_polygon_cases() {
 
 /// A near link's error is the deviation of its estimate over the receiver (`links::near_estimate`):
 /// the L1 error of pushing one F_RS to every point of the receiver. Against every polygon-to-polygon
-/// case, the ray estimator's deviation (default 8 rays, mean of 64 seeds) must not understate the
+/// case, the ray estimator's deviation (default 8 rays: 32 samples; mean of 64 seeds) must not understate the
 /// true one, (1/A_R) ∫ |F(x → S) − F_RS| dx with Lambert's exact point form factor over a 4^5-piece
 /// grid of the receiver. Refinement keeps a near link by this figure, so an understated one keeps a
 /// wrong link: until session 19 a near link's error was a bound capped by its parent's, and the

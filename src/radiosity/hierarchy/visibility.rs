@@ -325,13 +325,21 @@ pub fn towards_probability(nodes: &Nodes, node: usize, x: Vec3, element: usize) 
     probability
 }
 
+/// Samples of `sampled_form_factor` per visibility ray of a link (`VisibilityContext::rays`). A near
+/// link's error is read from its samples (`SampledFormFactor::deviation`), and 8 of them over a pair
+/// of building-sized clusters judge it poorly. At 4 × 8 the rooms came out 1–27% lower in relMSE
+/// and cornell_original seed 0 42%, for 0.94–1.23× the CPU time (the vault hall got cheaper: noisy
+/// deviations split fewer links needlessly); cornell seed 3 +8% and cornell_empty +30%, whose
+/// errors are a tenth of the rooms' (session 19, docs/accuracy.md).
+pub const NEAR_SAMPLES_PER_RAY: u32 = 4;
+
 /// A sampled form factor for links whose ends are too near for the cluster formula (overlapping
 /// bounding spheres, or a cluster straddling an element's plane), and for a cluster's self-link:
 /// Monte Carlo over the receiver, exact in each sampled source element:
 ///
 /// F_RS ≈ (1/N) Σ_k F(x_k → t_k) / p_k(t_k) · V_k
 ///
-/// over N = `ctx.rays` samples: x_k point k of the receiver's `EndPattern` (uniform by area), t_k
+/// over N = `NEAR_SAMPLES_PER_RAY` × `ctx.rays` samples: x_k point k of the receiver's `EndPattern` (uniform by area), t_k
 /// the source element that the first coordinate of point k of the source's pattern picks with
 /// probability p_k(t) ∝ a bounded kernel towards x_k (`sample_element_towards`, p_k from
 /// `towards_probability`), F(x → t) Lambert's
@@ -362,7 +370,7 @@ pub fn sampled_form_factor(
     receiver: usize,
     source: usize,
 ) -> SampledFormFactor {
-    let n = ctx.rays.max(1);
+    let n = ctx.rays.max(1) * NEAR_SAMPLES_PER_RAY;
     let (at_receiver, at_source) = EndPattern::pair(link_seed(ctx.seed ^ 0x5eed_f0f0, nodes, receiver, source));
     // Σ F_k V_k and Σ F_k over samples with a visibility ray; Σ F_k over samples without one.
     let (mut seen, mut tested, mut untested) = (0.0f64, 0.0f64, 0.0f64);
