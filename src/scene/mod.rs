@@ -1,6 +1,7 @@
 //! The plain scene description: camera, image and solver settings, materials and surfaces, as parsed
 //! from a scene file. Nothing here builds meshes or acceleration structures (see `mesh` and `accel`).
 
+pub mod frame;
 pub mod instance;
 pub mod lint;
 pub mod locate;
@@ -611,14 +612,29 @@ impl Quality {
 }
 
 impl SceneDescription {
-    /// Length of the diagonal of the scene's bounding box.
+    /// Length of the diagonal of the scene's bounding box along its principal frame (`frame`): the
+    /// scene's size, the same however the scene is turned (the world axes' box for a scene built
+    /// along them).
     pub fn diagonal(&self) -> f32 {
-        let (lo, hi) = self
-            .surfaces
-            .iter()
-            .flat_map(|s| s.vertices.iter())
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let frame = self.frame();
+        let (lo, hi) = self.surfaces.iter().flat_map(|s| s.vertices.iter()).fold(
+            (Vec3::INFINITY, Vec3::NEG_INFINITY),
+            |(lo, hi), &v| {
+                let q = frame.to_frame(v);
+                (lo.min(q), hi.max(q))
+            },
+        );
         (hi - lo).length()
+    }
+
+    /// The axes the scene's large planes line up with (`frame::principal` over its surfaces, each
+    /// with its Newell normal and area).
+    pub fn frame(&self) -> frame::Frame {
+        frame::principal(self.surfaces.iter().map(|s| {
+            let v = &s.vertices;
+            let newell = (0..v.len()).fold(Vec3::ZERO, |n, i| n + v[i].cross(v[(i + 1) % v.len()]));
+            (newell.normalize_or_zero(), 0.5 * newell.length())
+        }))
     }
 
     /// Sets element size, hemicube resolution, samples, light samples and the final gather from a preset.

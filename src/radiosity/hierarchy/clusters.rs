@@ -116,7 +116,10 @@ pub fn build_textured(scene: &SceneDescription, texels: &SurfaceTexels) -> Resul
     inputs.back = meta.iter().map(|m| m.1).collect();
     inputs.material = meta.iter().map(|m| m.2).collect();
     inputs.node = vec![NONE; count];
-    let centroid: Vec<Vec3> = corners_of.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
+    // The tree is split and boxed along the scene's own axes (`SceneDescription::frame`): a room
+    // built at an angle to the world's gets the tree it would get along them.
+    nodes.frame = scene.frame();
+    let centroid: Vec<Vec3> = corners_of.iter().map(|t| nodes.frame.to_frame((t[0] + t[1] + t[2]) / 3.0)).collect();
     let mut push_input = |nodes: &mut Nodes, i: usize| -> u32 {
         let (reflectance, emission) = solved[i];
         let node = nodes.push_element(corners_of[i], i as u32, 0, reflectance, emission);
@@ -170,11 +173,19 @@ fn split_sides(back: &[bool], items: &[u32]) -> Option<(Vec<u32>, Vec<u32>)> {
     (!fronts.is_empty() && !backs.is_empty()).then_some((fronts, backs))
 }
 
-/// Splits `items` (at least two) at the median of their centroids along the longest axis of the
-/// centroids' bounds, without cutting through a group of centroids at the median's coordinate: the
-/// group (often one plane of coplanar triangles, such as one face of a wall) goes whole to the side
-/// that keeps the halves closer to equal, so the split plane falls between distinct coordinates.
-/// Only when every centroid shares the coordinate are ties broken by index. Deterministic.
+/// Centroid coordinates closer than this times the largest magnitude along the split axis tie in
+/// `median_split` (about 34 f32 ulps: a wall of a room turned 30° about y, written to an OBJ and
+/// turned back, scatters its centroids by a few).
+pub const TIE_TOLERANCE: f32 = 4e-6;
+
+/// Splits `items` (at least two) at the median of their centroids (in the scene's frame) along the
+/// longest axis of the centroids' bounds, without cutting through a group of centroids at the
+/// median's coordinate: the group (often one plane of coplanar triangles, such as one face of a
+/// wall) goes whole to the side that keeps the halves closer to equal, so the split plane falls
+/// between distinct coordinates. Coordinates within `TIE_TOLERANCE` of the axis's magnitude count as
+/// equal: a wall at an angle to the world axes has its coordinates along the frame's axis rounded
+/// by its vertices' f32 positions and the rotation. Only when every centroid shares the coordinate
+/// are ties broken by index. Deterministic.
 ///
 /// Why: a plain count median cut the lit face of a two-room wall (all its centroids on z = 4) by
 /// index, and one lit triangle joined the cluster of the whole dark room behind it, whose links then
@@ -194,12 +205,14 @@ fn median_split(centroid: &[Vec3], mut items: Vec<u32>) -> (Vec<u32>, Vec<u32>) 
         2
     };
     let key = |i: u32| centroid[i as usize][axis];
+    let tolerance = TIE_TOLERANCE * lo[axis].abs().max(hi[axis].abs());
     let mid = items.len() / 2;
     items.select_nth_unstable_by(mid, |&a, &b| key(a).total_cmp(&key(b)).then(a.cmp(&b)));
     let at = key(items[mid]);
-    // items[..mid] ≤ at ≤ items[mid..]: those equal to `at` are the tie group across the cut.
-    let below = items[..mid].iter().filter(|&&i| key(i).total_cmp(&at).is_lt()).count();
-    let above = items[mid..].iter().filter(|&&i| key(i).total_cmp(&at).is_gt()).count();
+    // items[..mid] ≤ at ≤ items[mid..]: those within `tolerance` of `at` are the tie group across
+    // the cut.
+    let below = items[..mid].iter().filter(|&&i| key(i) < at - tolerance).count();
+    let above = items[mid..].iter().filter(|&&i| key(i) > at + tolerance).count();
     let n = items.len();
     // Cut before the group (left = `below` items) or after it (left = n − `above`), whichever is
     // nearer the median; neither when it would leave a side empty.

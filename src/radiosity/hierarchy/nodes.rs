@@ -7,6 +7,7 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 use super::texels::InputTexels;
+use crate::scene::frame::Frame;
 
 /// "No node": a leaf's `first_child`, the root's `parent`, a cluster's `input`.
 pub const NONE: u32 = u32::MAX;
@@ -65,6 +66,9 @@ pub struct Nodes {
     /// A textured scene's texture means (`texels`): pieces made by `subdivide` take the means over
     /// their own uv image. `None`: pieces inherit their parent's reflectance and emission.
     pub texels: Option<Arc<InputTexels>>,
+    /// The axes clusters are boxed along (the scene's principal frame, set by the cluster
+    /// build): a cluster's `centre` and `radius` are its members' box in this frame.
+    pub frame: Frame,
 }
 
 impl Nodes {
@@ -270,15 +274,18 @@ impl Nodes {
             exitance += self.exitance[c] * a as f64;
         }
         // The members' exact corner box (a child cluster's sphere box would grow the radius by up to
-        // √3 per level: a 19.6 m² cluster of the rotunda had a 263 m sphere in a 12 m room).
+        // √3 per level: a 19.6 m² cluster of the rotunda had a 263 m sphere in a 12 m room), along
+        // the scene's frame (a wall at an angle to the world axes keeps a thin box).
+        let frame = self.frame;
         let mut stack = vec![cluster];
         while let Some(n) = stack.pop() {
             if self.is_cluster[n] {
                 stack.extend(self.children(n));
             } else {
                 for p in self.corners[n] {
-                    lo = lo.min(p);
-                    hi = hi.max(p);
+                    let q = frame.to_frame(p);
+                    lo = lo.min(q);
+                    hi = hi.max(q);
                 }
             }
         }
@@ -290,7 +297,7 @@ impl Nodes {
         self.reflectance_max[cluster] = rho_max * inv;
         self.exitance[cluster] = exitance * inv as f64;
         self.exitance_mean[cluster] = mean_channel(self.exitance[cluster]);
-        self.centre[cluster] = (lo + hi) * 0.5;
+        self.centre[cluster] = frame.from_frame((lo + hi) * 0.5);
         self.radius[cluster] = (hi - lo).length() * 0.5;
     }
 
