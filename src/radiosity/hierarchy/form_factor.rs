@@ -81,6 +81,26 @@ fn point_to_source(point: Vec3, normal: Vec3, source: &Source) -> f64 {
     (sum.abs() / (2.0 * std::f64::consts::PI)).min(1.0)
 }
 
+/// `polygon` (at most 7 vertices, convex) clipped to the half-space n·(x − p) ≥ 0 above the plane
+/// of `point` and `normal`; empty when less than a polygon remains (Sutherland–Hodgman).
+pub fn clip_above(polygon: &[Vec3], point: Vec3, normal: Vec3) -> Vec<Vec3> {
+    let mut clipped = [DVec3::ZERO; 8];
+    let count = clip_to_half_space(polygon, point.as_dvec3(), normal.as_dvec3(), &mut clipped);
+    if count < 3 {
+        return Vec::new();
+    }
+    clipped[..count].iter().map(|v| v.as_vec3()).collect()
+}
+
+/// A point of `polygon` in the half-space above the plane of `point` and `normal`: the mean of the
+/// vertices of `clip_above`; `None` when less than a polygon remains. The part of a source element
+/// that a receiver point sees, for a visibility ray where a uniform point of the element lies below
+/// the point's plane (`visibility::sampled_form_factor`).
+pub fn point_above(polygon: &[Vec3], point: Vec3, normal: Vec3) -> Option<Vec3> {
+    let clipped = clip_above(polygon, point, normal);
+    (!clipped.is_empty()).then(|| clipped.iter().sum::<Vec3>() / clipped.len() as f32)
+}
+
 /// Newell's (unnormalised, twice the area) normal of a polygon.
 fn newell_normal(polygon: &[Vec3]) -> DVec3 {
     let mut n = DVec3::ZERO;
