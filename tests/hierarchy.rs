@@ -963,6 +963,36 @@ fn link_visibility_weighs_each_ray_by_the_form_factor_of_its_pair() {
     assert!((mean / exact - 1.0).abs() < 0.05, "V {mean} against {exact}");
 }
 
+/// A link whose uniform sample pairs (almost) never face each other still has its visibility
+/// measured (`visibility::facing_member_visibility`): a floor 10 m long of which only a 1 mm sliver
+/// lies in front of the plane of a wall panel 5 m above it (the 4N = 64 uniform pairs of 16 rays find
+/// a facing one with probability 1e-4 each) gets V = 1 with nothing between them and V = 0 under a
+/// plate that hides the panel from the sliver. Until session 20 V was 1 in both cases, unmeasured:
+/// the way two rooms turned off the axes passed light through their wall
+/// (`light_does_not_leak_through_a_wall_turned_off_the_axes`).
+#[test]
+fn a_link_whose_samples_do_not_face_has_its_visibility_measured() {
+    use hierarchy::visibility::{link_visibility, VisibilityContext};
+    let floor = [
+        Vec3::new(-10.0, 0.0, 0.0),
+        Vec3::new(0.001, 0.0, 0.0),
+        Vec3::new(0.001, 1.0, 0.0),
+        Vec3::new(-10.0, 1.0, 0.0),
+    ];
+    let panel =
+        [Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 1.0, 5.0), Vec3::new(0.0, 1.0, 6.0), Vec3::new(0.0, 0.0, 6.0)];
+    let plate =
+        [Vec3::new(-1.0, -1.0, 2.5), Vec3::new(1.0, -1.0, 2.5), Vec3::new(1.0, 2.0, 2.5), Vec3::new(-1.0, 2.0, 2.5)];
+    let (open_nodes, r, s, open_accel) = two_clusters(&floor, &panel, 0);
+    let (blocked_nodes, _, _, blocked_accel) = two_clusters_with(&floor, &panel, 0, &plate);
+    for seed in 0..8 {
+        let open = VisibilityContext { accel: &open_accel, rays: 16, offset: 1e-5, seed };
+        let blocked = VisibilityContext { accel: &blocked_accel, rays: 16, offset: 1e-5, seed };
+        assert_eq!(link_visibility(&open, &open_nodes, r, s).visible, 1.0, "seed {seed}, nothing between");
+        assert_eq!(link_visibility(&blocked, &blocked_nodes, r, s).visible, 0.0, "seed {seed}, under the plate");
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
