@@ -189,6 +189,25 @@ fn shipped_specular_cornell_box_is_checked_from_nearby_pairs_only() {
     assert!(r.candidate_pairs < 20 * scene.surfaces.len(), "{} pairs", r.candidate_pairs);
 }
 
+/// The tolerance is relative to the scene's size along its own axes: l_room turned 30° about y keeps
+/// the diagonal and tolerance it has built along the world axes (a world-axis box would be 22% larger)
+/// and, so, its findings.
+#[test]
+fn a_turned_room_is_checked_with_the_tolerance_it_has_unturned() {
+    let room = shipped("rooms/l_room.toml");
+    let mut turned = room.clone();
+    let turn = glam::Quat::from_rotation_y(30f32.to_radians());
+    for s in &mut turned.surfaces {
+        for v in &mut s.vertices {
+            *v = turn * *v;
+        }
+    }
+    let (a, b) = (lint::check(&room), lint::check(&turned));
+    assert!((b.scene_diagonal / a.scene_diagonal - 1.0).abs() < 1e-5, "{} vs {}", b.scene_diagonal, a.scene_diagonal);
+    assert!((b.tolerance / a.tolerance - 1.0).abs() < 1e-5, "{} vs {}", b.tolerance, a.tolerance);
+    assert_eq!(counts(&b), counts(&a), "turned:\n{b}\nunturned:\n{a}");
+}
+
 #[test]
 fn shipped_furnace_is_clean() {
     let r = lint::check(&shipped("furnace.toml"));

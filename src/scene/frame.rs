@@ -62,6 +62,14 @@ impl Frame {
         }
     }
 
+    /// `to_frame` in f64 (`p` itself in the world frame): for boxes measured in f64 (the geometry lint).
+    pub fn to_frame_f64(&self, p: DVec3) -> DVec3 {
+        match self.axes {
+            None => p,
+            Some([a, b, c]) => DVec3::new(a.as_dvec3().dot(p), b.as_dvec3().dot(p), c.as_dvec3().dot(p)),
+        }
+    }
+
     /// The frame's axes as world vectors.
     pub fn axes(&self) -> [Vec3; 3] {
         self.axes.unwrap_or([Vec3::X, Vec3::Y, Vec3::Z])
@@ -127,6 +135,15 @@ pub fn principal(triangles: impl Iterator<Item = (Vec3, f32)>) -> Frame {
         return Frame::world();
     }
     Frame { axes: Some(nearest_to_world([a1, a2, a3]).map(|a| a.as_vec3())) }
+}
+
+/// The principal frame of planar polygons (`principal` over each one's Newell normal and area):
+/// the frame of a scene's surfaces (`SceneDescription::frame`, the geometry lint's size).
+pub fn of_polygons<'a>(polygons: impl Iterator<Item = &'a [Vec3]>) -> Frame {
+    principal(polygons.map(|v| {
+        let newell = (0..v.len()).fold(Vec3::ZERO, |n, i| n + v[i].cross(v[(i + 1) % v.len()]));
+        (newell.normalize_or_zero(), 0.5 * newell.length())
+    }))
 }
 
 /// The axes reordered and signed to lie nearest the world's x, y and z: of the six orders, the one

@@ -630,11 +630,7 @@ impl SceneDescription {
     /// The axes the scene's large planes line up with (`frame::principal` over its surfaces, each
     /// with its Newell normal and area).
     pub fn frame(&self) -> frame::Frame {
-        frame::principal(self.surfaces.iter().map(|s| {
-            let v = &s.vertices;
-            let newell = (0..v.len()).fold(Vec3::ZERO, |n, i| n + v[i].cross(v[(i + 1) % v.len()]));
-            (newell.normalize_or_zero(), 0.5 * newell.length())
-        }))
+        frame::of_polygons(self.surfaces.iter().map(|s| s.vertices.as_slice()))
     }
 
     /// Sets element size, hemicube resolution, samples, light samples and the final gather from a preset.

@@ -6,7 +6,7 @@
 //! grid over the faces' bounding boxes (`grid`, each pair visited once), so the cost grows with the
 //! number of nearby pairs, not with n²; pairs are examined in parallel (rayon) and their findings
 //! gathered in the pairs' order, so the report does not depend on the thread count. Geometry is evaluated in f64 (`polygon`). Lengths are compared
-//! with one absolute tolerance, `relative_tolerance` × the scene's bounding-box diagonal (never below
+//! with one absolute tolerance, `relative_tolerance` × the scene's bounding-box diagonal along its principal frame (never below
 //! the f32 spacing of the scene's coordinates): see [`LintOptions`]. This file holds the report's types
 //! and runs the checks; `report` prints it.
 
@@ -22,7 +22,7 @@ mod weld;
 
 pub use polygon::Poly;
 
-use crate::scene::{SceneDescription, Surface};
+use crate::scene::{frame, SceneDescription, Surface};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -155,7 +155,7 @@ pub struct GeometryReport {
     pub surface_count: usize,
     /// Surfaces left out of every check: fewer than 3 corners, non-finite corners or zero area.
     pub skipped_surfaces: usize,
-    /// Diagonal of the scene's bounding box.
+    /// Diagonal of the scene's bounding box along its principal frame (`scene::frame`).
     pub scene_diagonal: f64,
     /// The absolute length tolerance every check used.
     pub tolerance: f64,
@@ -177,6 +177,25 @@ impl GeometryReport {
             && self.flipped.count == 0
             && self.flipped.inconsistent_edges == 0
             && self.non_planar.count == 0
+    }
+}
+
+/// The diagonal of the surfaces' bounding box along the scene's principal frame (`frame::of_polygons`,
+/// as `SceneDescription::diagonal` measures the scene), so that a room built at an angle to the world
+/// axes gets the tolerance it gets built along them; 0 without a checkable polygon.
+fn frame_diagonal(surfaces: &[Surface], polys: &[Option<Poly>]) -> f64 {
+    let frame = frame::of_polygons(surfaces.iter().map(|s| s.vertices.as_slice()));
+    let (lo, hi) = polys.iter().flatten().flat_map(|p| p.vertices.iter()).fold(
+        (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        |(lo, hi), &v| {
+            let q = frame.to_frame_f64(v);
+            (lo.min(q), hi.max(q))
+        },
+    );
+    if lo.x <= hi.x {
+        (hi - lo).length()
+    } else {
+        0.0
     }
 }
 
@@ -205,7 +224,7 @@ pub fn check_surfaces(surfaces: &[Surface], options: &LintOptions) -> GeometryRe
     let skipped_surfaces = polys.iter().filter(|p| p.is_none()).count();
     let (lo, hi) =
         polys.iter().flatten().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p.lo), hi.max(p.hi)));
-    let scene_diagonal = if lo.x <= hi.x { (hi - lo).length() } else { 0.0 };
+    let scene_diagonal = frame_diagonal(surfaces, &polys);
     let magnitude = if lo.x <= hi.x { lo.abs().max(hi.abs()).max_element() } else { 0.0 };
     let tolerance = (options.relative_tolerance * scene_diagonal).max(8.0 * f32::EPSILON as f64 * magnitude);
     let tolerance = if tolerance > 0.0 { tolerance } else { f32::EPSILON as f64 };
