@@ -22,7 +22,10 @@ Rooms (unit: metres, y up):
                objects carrying smooth vertex normals (OBJ vn);
   vault_hall   a barrel-vaulted nave lit by three window-like emitters on a long wall, with ten finely
                tessellated columns, a sphere and a torus: about 40k small triangles, a scene near the
-               size where the uniform mesh's matrix stops being the cheaper method.
+               size where the uniform mesh's matrix stops being the cheaper method;
+  stair_hall   a tall hall (5.5 m) with twelve steps along a wall up to a landing 3 m up and a corridor
+               leaving it, lit only by a window-like emitter high on a wall (session 21: a shape the
+               hierarchy was not developed on).
 
 Conventions (as every radray scene): right-handed; every polygon is counter-clockwise seen from its
 front, and every surface is one-sided and faces into the room (room shells inwards, furniture
@@ -410,6 +413,53 @@ def alcove_hall():
     return m, cam
 
 
+def stair_hall():
+    m = room_model((0.42, 0.40, 0.38))
+    m.material("stone", Kd=(0.62, 0.60, 0.55))
+    m.material("plaster", Kd=(0.70, 0.55, 0.42))
+    m.material("window", Kd=(0, 0, 0), Ke=(30.0, 27.0, 22.0))
+    # 12 steps of 0.3 m x 0.25 m along the left wall (x in [0, 1.1]) rise from z = 1.0 to the landing
+    # (z in [4.6, 6.0], 3 m up, across the hall); a 1 m wide upper corridor leaves the landing at the back.
+    steps = [round(1.0 + 0.3 * k, 6) for k in range(13)]  # 1.0 ... 4.6
+    xs = [0.0, 1.1, 2.0, 3.0, 5.0]
+    zs = [0.0] + steps + [6.0, 7.5, 9.0]
+    H = 5.5
+
+    def column(i, j):
+        z0 = zs[j]
+        if z0 >= 6.0:  # the upper corridor, x in [2, 3], 2 m high
+            return (3.0, 5.0) if xs[i] == 2.0 else None
+        if z0 >= 4.6:  # the landing
+            return (3.0, H)
+        if i == 0 and z0 >= 1.0:  # the stairs
+            return (0.25 * (steps.index(z0) + 1), H)
+        return (0.0, H)
+
+    def walls(i, j, side, y0, y1):
+        z0 = zs[j]
+        if side == "+x" and i == len(xs) - 2 and 1.6 <= z0 < 3.4:  # the window, high on the right wall
+            return [(y0, 3.4, "wall"), (3.4, 4.6, "window"), (4.6, y1, "wall")]
+        if i == 0 and z0 < 4.6 and side == "-x":
+            return [(y0, y1, "plaster")]
+        if side == "-x" and xs[i] == 1.1 and 1.0 <= z0 < 4.6:  # the staircase's open side
+            return [(y0, y1, "stone")]
+        return [(y0, y1, "wall")]
+
+    def floor_mat(i, j):
+        return "stone" if i == 0 and 1.0 <= zs[j] < 4.6 else "floor"
+
+    shell(m, xs, zs, column, floor_mat, lambda i, j: "ceiling", walls)
+    table(m, 2.6, 3.8, 1.6, 2.5, 0.75, "wood")
+    m.box("chest", "wood", (3.6, 3.0, 5.4), (4.8, 3.6, 6.0), omit=("-y", "+z"))  # on the landing, at the back wall
+    m.write(os.path.join(HERE, "stair_hall"), "stair_hall: a tall hall with stairs, a landing, an upper corridor")
+    eye, look = (4.6, 1.6, 0.3), (1.2, 2.7, 5.5)
+    cam = {"eye": eye, "look_at": look, "up": rolled_up(eye, look, 0.0), "vfov_deg": 72.0}
+    write_toml("stair_hall", "A tall hall (5 x 6 m, 5.5 m high) with twelve steps along a wall up to a landing "
+               "3 m up and a corridor\n# leaving it; the only light is a window-like emitter high on the "
+               "right wall, out of view.", cam)
+    return m, cam
+
+
 # ----------------------------------------------------------------------------------------- textures
 def srgb_encode(lin):
     lin = np.clip(lin, 0.0, 1.0)
@@ -701,6 +751,6 @@ def vault_hall():
 
 
 if __name__ == "__main__":
-    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda, vault_hall):
+    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda, vault_hall, stair_hall):
         model, _ = make()
         print("%-12s %4d triangles, %d materials" % (make.__name__, model.triangle_count(), len(model.materials)))
