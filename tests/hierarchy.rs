@@ -1486,3 +1486,40 @@ fn the_cluster_tree_of_two_turned_rooms_mixes_them_only_at_the_root() {
         }
     }
 }
+
+/// The spread of an element receiver's links over its leaves by position (`positional_spread`) moves
+/// light between the leaves below each receiver and creates or loses none: Σ_leaves A·ΔB/ρ = 0 for
+/// the whole scene (each link's is 0 by construction; f64 sums, 1e-9 relative), no exitance goes
+/// negative, and on alcove_hall, whose walls are linked above their leaves, it moves something
+/// (the leaves below a receiver no longer all take its mean).
+#[test]
+fn the_positional_spread_moves_light_between_leaves_and_conserves_it() {
+    let scene = load_scene("rooms/alcove_hall.toml");
+    let params = HierarchyParams::preview();
+    let (_, structure) = hierarchy::solve_reusing(&scene, Default::default(), &params, None, &mut |_| {}).unwrap();
+    let (nodes, links) = (structure.nodes(), structure.links());
+    let scales = gather::ArrivalScales::new(nodes, links);
+    let spread = hierarchy::positional_spread::spread_leaf_exitance(nodes, links, &scales);
+    assert!(spread.len() > 1000, "{} leaves spread", spread.len());
+    let (mut moved_w, mut total_w, mut largest_change) = (0.0f64, 0.0f64, 0.0f64);
+    for &(leaf, b) in &spread {
+        assert!(nodes.is_leaf(leaf));
+        assert!(b.min_element() >= 0.0, "leaf {leaf}: {b}");
+        let rho = nodes.reflectance[leaf].as_dvec3();
+        let old = nodes.exitance[leaf];
+        for c in 0..3 {
+            if rho[c] > 0.0 {
+                let area = nodes.area[leaf] as f64;
+                moved_w += area * (b[c] - old[c]) / rho[c];
+                total_w += area * (old[c] - nodes.emission[leaf][c] as f64) / rho[c];
+                largest_change = largest_change.max((b[c] - old[c]).abs() / old[c].max(1e-9));
+            }
+        }
+    }
+    println!(
+        "{} leaves: net power moved {moved_w:e} W of {total_w:.3} W received; largest change {largest_change:.3}",
+        spread.len()
+    );
+    assert!(moved_w.abs() <= 1e-9 * total_w, "net {moved_w} W of {total_w} W");
+    assert!(largest_change > 0.01, "largest relative change {largest_change}");
+}

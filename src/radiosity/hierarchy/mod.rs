@@ -29,6 +29,7 @@ pub mod links;
 pub mod links_file;
 pub mod nodes;
 pub mod part_file;
+pub mod positional_spread;
 pub mod procedural;
 pub mod refine;
 pub mod shaft;
@@ -352,6 +353,11 @@ impl LinkStructure {
     pub fn inputs(&self) -> &clusters::InputTriangles {
         &self.inputs
     }
+
+    /// The root of the cluster tree.
+    pub fn root(&self) -> usize {
+        self.root
+    }
 }
 
 /// Solves the scene's diffuse radiosity hierarchically, with every material's Kd and π·Ke (no
@@ -566,13 +572,24 @@ pub fn solve_logged(
             }
         }
     }
+    // The leaves' exitance with each element receiver's links spread by position (the solved
+    // exitance stays in the kept structure, for a re-solve to start from).
+    let spread =
+        scales.as_ref().map(|s| positional_spread::spread_leaf_exitance(&nodes, &links, s)).unwrap_or_default();
     // Not needed past the sweeps; freed before the leaf mesh is built.
     drop(scales);
     stats.nodes = nodes.len();
     stats.links = links.len();
     stats.bytes = nodes.len() * NODE_BYTES + links.memory_bytes();
     stats.peak_bytes = stats.peak_bytes.max(stats.bytes);
+    let solved_exitance: Vec<(usize, DVec3)> = spread.iter().map(|&(n, _)| (n, nodes.exitance[n])).collect();
+    for &(n, b) in &spread {
+        nodes.exitance[n] = b;
+    }
     let solved = solution(&nodes, &inputs, root, stats);
+    for (n, b) in solved_exitance {
+        nodes.exitance[n] = b;
+    }
     Ok((solved, LinkStructure { nodes, links, threshold: settings.threshold, root, inputs, tracing }))
 }
 
