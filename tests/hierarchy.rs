@@ -1499,7 +1499,7 @@ fn the_positional_spread_moves_light_between_leaves_and_conserves_it() {
     let (_, structure) = hierarchy::solve_reusing(&scene, Default::default(), &params, None, &mut |_| {}).unwrap();
     let (nodes, links) = (structure.nodes(), structure.links());
     let scales = gather::ArrivalScales::new(nodes, links);
-    let spread = hierarchy::positional_spread::spread_leaf_exitance(nodes, links, &scales);
+    let spread = hierarchy::positional_spread::spread_leaf_exitance(nodes, links, &scales, structure.root());
     assert!(spread.len() > 1000, "{} leaves spread", spread.len());
     let (mut moved_w, mut total_w, mut largest_change) = (0.0f64, 0.0f64, 0.0f64);
     for &(leaf, b) in &spread {

@@ -575,7 +575,7 @@ pub fn solve_logged(
     // The leaves' exitance with each element receiver's links spread by position (the solved
     // exitance stays in the kept structure, for a re-solve to start from).
     let spread =
-        scales.as_ref().map(|s| positional_spread::spread_leaf_exitance(&nodes, &links, s)).unwrap_or_default();
+        scales.as_ref().map(|s| positional_spread::spread_leaf_exitance(&nodes, &links, s, root)).unwrap_or_default();
     // Not needed past the sweeps; freed before the leaf mesh is built.
     drop(scales);
     stats.nodes = nodes.len();
