@@ -525,6 +525,9 @@ pub fn solve_logged(
                 stats.add_refinement(pass, &outcome, outcome.error_after_w);
                 links = outcome.links;
                 if shard_pass == Some(pass) {
+                    // The scales belong to the previous pass's links: a shard's partial solve
+                    // gets no positional spread (its merge solves again).
+                    scales = None;
                     break;
                 }
                 let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
