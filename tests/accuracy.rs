@@ -172,12 +172,15 @@ fn specular_cornell_box_final_is_closer_than_pure_radiosity() {
 
 #[test]
 fn specular_cornell_box_final_is_within_the_issue_bound() {
-    // Bound from issue 5, over every pixel (nothing masked). The reference's caustics reach radray as
+    // Issue 5 asked for 0.005, over every pixel (nothing masked). The reference's caustics reach radray as
     // light traced from the emitter through the spheres (`trace::caustics`): pass one's extended form
     // factors to the emitter come from those photons, and pass two sharpens them per pixel by density
     // estimation. Measured 0.00157 at `specular_metrics`'s settings (session 6); 0.00050 when the
     // caustic photons landed, at that time's settings; 0.0075 before, when the caustic came from
-    // hemicube paths at element resolution.
+    // hemicube paths at element resolution. With the final gather on (the scene's default) it was
+    // 0.00175 while the gather rays also counted the lamp seen through the spheres, on top of the
+    // photons' detail (session 22); 0.00054 since the gather leaves that light to the photons. The
+    // bound is held at 0.001 so that such a double count cannot come back unseen.
     let (image, final_, radiosity) = specular_metrics(256);
     println!(
         "cornell_specular (hemicube 256): final relMSE {:.5} MARE {:.4}, radiosity relMSE {:.5} MARE {:.4}",
@@ -186,10 +189,10 @@ fn specular_cornell_box_final_is_within_the_issue_bound() {
         radiosity.errors.rel_mse,
         radiosity.errors.mean_abs_rel_err
     );
-    if final_.errors.rel_mse > 0.005 || final_.errors.rel_mse >= radiosity.errors.rel_mse {
+    if final_.errors.rel_mse > 0.001 || final_.errors.rel_mse >= radiosity.errors.rel_mse {
         let dir = keep_for_inspection("cornell_specular.final", &image, &reference("cornell_specular"));
         panic!(
-            "relMSE {:.5} above 0.005 (or not below radiosity's {:.5}); images in {}",
+            "relMSE {:.5} above 0.001 (or not below radiosity's {:.5}); images in {}",
             final_.errors.rel_mse,
             radiosity.errors.rel_mse,
             dir.display()

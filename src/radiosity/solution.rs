@@ -43,6 +43,13 @@ fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
 }
 
 impl Solution {
+    /// Whether the exitance holds the light that reached diffuse surfaces through mirrors and glass
+    /// (LS+D, by extended form factors): the uniform and adaptive meshes' solutions do, the hierarchy's
+    /// (`leaf_geometry`) transports diffuse light only.
+    pub fn holds_caustic_light(&self) -> bool {
+        self.leaf_geometry.is_none()
+    }
+
     /// Bytes held by the solution (its four arrays, an adaptive refinement's split indices and the
     /// struct).
     pub fn memory_bytes(&self) -> u64 {

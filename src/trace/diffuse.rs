@@ -87,6 +87,11 @@ impl<'a> Diffuse<'a> {
     }
 
     /// The estimator needs the direct irradiance at the hit (`radiance`'s `direct_irradiance`).
+    /// Whether the solution holds the caustic light at element resolution (`Solution::holds_caustic_light`).
+    pub fn holds_caustic_light(&self) -> bool {
+        self.solution.holds_caustic_light()
+    }
+
     pub fn needs_direct_light(&self) -> bool {
         self.estimator == DiffuseEstimator::PixelDirect
     }
@@ -112,7 +117,10 @@ impl<'a> Diffuse<'a> {
     /// L = (E + max(ρ(x)·(H − H_direct)(p) + ΔB_c, 0))/π + ρ(x)/π·E_direct.
     ///
     /// With a gather, H_g replaces the interpolated indirect irradiance (B − E − B_direct)/ρ̄ₑ, and ρ (the
-    /// texel albedo where textured) multiplies it directly:
+    /// texel albedo where textured) multiplies it directly. The caustic term is then all of the
+    /// reflected caustic light, ΔB_c = ρ·E_caustic(p), not its detail: the element-level share left
+    /// with the interpolated solution, and the gather rays leave emitters seen through mirrors and
+    /// glass to the map (`Tracer::gather_radiance`):
     /// Interpolated: L = (E + max(B_direct(p) + ρ·H_g + ΔB_c, 0))/π, where textured B_direct(p) is
     /// ρ(x)·H_direct(p); PixelDirect: L = (E + max(ρ·H_g + ΔB_c, 0))/π + ρ/π·E_direct.
     #[allow(clippy::too_many_arguments)]

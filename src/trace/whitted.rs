@@ -406,10 +406,18 @@ impl<'a> Tracer<'a> {
                 } else {
                     DirectEstimate::default()
                 };
-                // Caustic detail: the LS+D light at pixel resolution minus the same at element resolution.
+                // Caustic light (LS+D): without a gather, the detail the element solution misses, the map's
+                // light at pixel resolution minus the same at element resolution; with a gather, all of
+                // it, since the gather leaves the paths through mirrors and glass to an emitter to the map
+                // (`gather_radiance`); all of it too over a solution without it (the hierarchy's).
                 let caustic = match &self.caustics {
                     Some(map) if reflectance.max_element() > 0.0 => {
-                        reflectance * (map.irradiance(p, hit.surface) - map.smooth_irradiance(&hit))
+                        let in_solution = if self.gather.is_none() && self.diffuse.holds_caustic_light() {
+                            map.smooth_irradiance(&hit)
+                        } else {
+                            Vec3::ZERO
+                        };
+                        reflectance * (map.irradiance(p, hit.surface) - in_solution)
                     }
                     _ => Vec3::ZERO,
                 };

@@ -44,11 +44,13 @@ impl Tracer<'_> {
     /// The reflected exitance B(x) − E at a gather ray's near hit x on `element` (reflectance ρₑ, the
     /// element's as in pass one), estimated at the point rather than interpolated:
     ///
-    /// B(x) − E = ρₑ·(E_direct(x) + H(x)),
+    /// B(x) − E = ρₑ·(E_direct(x) + H(x) + E_caustic(x)),
     ///
     /// E_direct from `NEAR_LIGHT_SAMPLES` shadow rays (`DirectLight::irradiance`), H = π/(MN) Σ L_jk a
     /// secondary gather over `near.strata` whose rays read the interpolated solution
-    /// (`gather_radiance` without a further near bounce). The solution's errors then enter one bounce
+    /// (`gather_radiance` without a further near bounce) and E_caustic the caustic map's density
+    /// estimate at x (0 without a map; with one, the secondary gather leaves that light to it). The
+    /// solution's errors then enter one bounce
     /// further away, damped by ρ. On a smooth surface both take its shading normal, guarded by the
     /// geometric one as at the camera's hits (`Tracer::gather`: H = π/T Σ over the T cells above the
     /// facet's plane).
@@ -85,7 +87,9 @@ impl Tracer<'_> {
         }
         // Cells below the geometric plane give their share to the traced ones, as in `Tracer::gather`.
         let indirect = if traced > 0 { sum * (PI / traced as f32) } else { Vec3::ZERO };
-        reflectance * (direct + indirect)
+        // The light through mirrors and glass to an emitter, which the gather rays leave to the map.
+        let caustic = self.caustics().map_or(Vec3::ZERO, |map| map.irradiance(x, hit.surface));
+        reflectance * (direct + indirect + caustic)
     }
 }
 

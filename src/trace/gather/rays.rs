@@ -26,7 +26,10 @@ impl Tracer<'_> {
     /// (`gather_radiance`), and its irradiance, harmonic mean distance and gradients
     /// (`hemisphere::estimate`). The irradiance is the indirect part: light from the emitters along
     /// straight lines is left out; what arrives through mirrors and glass is in. Near hits get the
-    /// tracer's second bounce (`[render] near_bounce`, see `near`).
+    /// tracer's second bounce (`[render] near_bounce`, see `near`). With a caustic map (`Tracer::with_caustics`)
+    /// the light of emitters seen through mirrors and glass is left out too: the map holds all of it
+    /// (LS+D), with less noise than rays that must find a small emitter through a curved mirror, and
+    /// the camera hit adds it once (`Diffuse::radiance`'s caustic term).
     ///
     /// With a shading normal n_s the cells are cosine-weighted around n_s (the Lambertian lobe of the
     /// smooth surface) and rays leave along the geometric normal n_g. A cell whose direction lies
@@ -80,10 +83,12 @@ impl Tracer<'_> {
     /// Radiance arriving at `origin` from `dir` as the gather counts it, and the distance to the first
     /// surface (infinite if none): at a diffuse hit x on element e, (B(x) − E_e)/π, with B the
     /// interpolated exitance (`Diffuse::radiosity_at`); the emission E_e counts only after a specular
-    /// bounce (shadow rays and pass one's direct part see straight paths only). With `near`, a first
+    /// bounce (shadow rays and pass one's direct part see straight paths only), and only when the
+    /// tracer has no caustic map. With `near`, a first
     /// hit closer than `NearBounce::applies` reads B(x) − E from `near_exitance` instead, estimated at
     /// x. Mirrors and glass add their branches (`transport::scatter`) up to `GATHER_SPECULAR_DEPTH`
-    /// bounces.
+    /// bounces; with a caustic map, the emission reached after a specular bounce is the map's and is
+    /// left out as at a straight hit (B − E), so the caustic is not counted twice.
     pub fn gather_radiance(
         &self,
         origin: Vec3,
@@ -96,6 +101,7 @@ impl Tracer<'_> {
         let mut radiance = Vec3::ZERO;
         let mut first_distance = f32::INFINITY;
         let elements = &self.mesh().elements;
+        let caustics_mapped = self.caustics().is_some();
         while let Some(ray) = stack.pop() {
             counts.secondary += 1;
             let Some((hit, distance)) = self.closest_opaque_hit(ray.origin, ray.dir) else {
@@ -112,7 +118,8 @@ impl Tracer<'_> {
                     }
                     _ => {
                         let exitance = self.diffuse().radiosity_at(&hit);
-                        let emission = if ray.depth == 0 { elements.emission[element] } else { Vec3::ZERO };
+                        let emission =
+                            if ray.depth == 0 || caustics_mapped { elements.emission[element] } else { Vec3::ZERO };
                         exitance - emission
                     }
                 };
