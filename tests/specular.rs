@@ -393,8 +393,8 @@ fn a_coloured_glass_slab_tints_the_light_it_passes_by_its_filter_colour() {
 /// points at least a wide kernel's radius (0.16 m: 2 % of the scene's 8 m) from the receiver's edges,
 /// where no kernel reaches past it. About 1,000 photons land on the receiver: 5 within a fine kernel
 /// (r = 0.04 m), 80 within a wide one. The fine kernel alone scattered the estimate by a relative RMS
-/// of 0.48 (worst point 0.88); the map now reads the wide kernel where the fine one holds fewer than
-/// `KERNEL_PHOTONS` and the light is not focused (`CausticMap::irradiance`): 0.106 (worst 0.300).
+/// of 0.48 (worst point 0.88); the map now reads the wide kernel where the light is even at its scale
+/// (`CausticMap::irradiance`): 0.106 (worst 0.300).
 /// Bounds: 0.15, and 0.4 for the worst of 49 points (about 3σ of an 80-photon Epanechnikov estimate,
 /// whose weights make it noisier than a plain count's 1/√80).
 #[test]

@@ -18,8 +18,9 @@ pub const MERGE_FRACTION: f32 = 0.25;
 pub const KERNEL_RADIUS_FRACTION: f32 = 0.005;
 /// The wider kernel's radius, in fine kernel radii (`CausticMap::irradiance`).
 pub const WIDE_KERNEL_FACTOR: f32 = 4.0;
-/// Photons a kernel should hold for its estimate to be kept (relative noise about 1/√16 = 25 %).
-pub const KERNEL_PHOTONS: u32 = 16;
+/// Photons in the fine kernel above which its estimate is kept without a look at the wide one
+/// (relative noise about 1/√256 ≈ 6 %).
+pub const DENSE_KERNEL_PHOTONS: u32 = 256;
 
 /// Photons that reached a diffuse surface after one or more specular bounces, gathered by a fine
 /// and a wide kernel, and the same light averaged per element and over the vertices as pass one
@@ -83,25 +84,27 @@ impl CausticMap {
     }
 
     /// Caustic irradiance at `p` on mesh surface `surface`, by density estimation (`Kernel::estimate`)
-    /// with the fine kernel of radius r where it holds at least `KERNEL_PHOTONS` photons, else with the
-    /// wide kernel of radius R = 4r unless that says the fine kernel should have held them:
+    /// with a fine kernel of radius r where photons are dense or the light changes within the wide
+    /// kernel's radius R = 4r, else with the wide kernel:
     ///
-    /// E(p) = E_R(p) if n_r < K and n_R·(r/R)² < K, else E_r(p),
+    /// E(p) = E_r(p) if n_r ≥ `DENSE_KERNEL_PHOTONS` or |n_r − m| > 3·√(m + 1), else E_R(p),
     ///
-    /// n the photons within each radius. Where the caustic is weak and spread (a convex mirror's light
-    /// over a room's walls) the fine kernel holds a photon or two and its estimate is grain; the wide
-    /// one averages 16 times the area. Beside a focus (n_R·(r/R)² ≥ K: photons are dense within R but
-    /// not within r) the fine estimate is kept, so focused caustics keep their edges. What the wide
-    /// kernel costs is a band R wide along a surface's edges where the kernel reaches past the surface
-    /// and reads up to half the light (as the fine kernel does in a band r wide).
+    /// n the photons within each radius and m = n_R·(r/R)² the count the fine kernel would hold if
+    /// the density were the same over the wide kernel's disc (a Poisson count's 3σ). Where the light
+    /// is even at the wide kernel's scale, weak and spread (a convex mirror's light over a room's
+    /// walls: a photon or two per fine kernel, grain) or a moderate patch (a plane mirror's image of
+    /// the lamp: tens), the wide estimate averages 16 times the area; beside a focus or an edge the
+    /// counts disagree and the fine estimate keeps it sharp. What the wide kernel costs is a band R
+    /// wide along a surface's edges where it reaches past the surface and reads up to half the light
+    /// (the fine kernel does the same in a band r wide).
     pub fn irradiance(&self, p: Vec3, surface: u32) -> Vec3 {
         let (fine, n_fine) = self.fine.estimate(p, surface);
-        if n_fine >= KERNEL_PHOTONS {
+        if n_fine >= DENSE_KERNEL_PHOTONS {
             return fine;
         }
         let (wide, n_wide) = self.wide.estimate(p, surface);
         let expected_fine = n_wide as f32 / (WIDE_KERNEL_FACTOR * WIDE_KERNEL_FACTOR);
-        if expected_fine < KERNEL_PHOTONS as f32 {
+        if (n_fine as f32 - expected_fine).abs() <= 3.0 * (expected_fine + 1.0).sqrt() {
             wide
         } else {
             fine
