@@ -640,7 +640,8 @@ fn a_caustic_counts_once_with_the_final_gather() {
     // all of it: without a gather the image shows the solution's element-level share plus the map's
     // detail below it, with a gather the map's light in full while the gather rays leave emitters seen
     // through glass to the map. Either way the caustic is the map's, once. The hierarchy's solution
-    // holds no light through glass, so the map gives all of it there, gather or not. Before (focus,
+    // holds that light at its leaves' resolution too (session 23; before, none of it, and the map gave
+    // all of it there, gather or not), so it reads the same way as the matrix's. Before (focus,
     // matrix with the gather off 0.234): the gather also counted the lamp it saw through the ball
     // while the detail was still added, 0.313 (+34%), the pixels around the focus too dark, and the
     // walls of a box with a mirror ball speckled (the McGuire CornellBox-Sphere); over the hierarchy

@@ -13,7 +13,8 @@ use radray::mesh::Mesh;
 use radray::radiosity::fingerprint::fingerprint;
 use radray::radiosity::smooth_mesh::SmoothMesh;
 use radray::radiosity::solution_file::{
-    SolutionFileError, FILE_MAGIC, FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_REFINED_MESH,
+    SolutionFileError, FILE_MAGIC, FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_LEAF_MESH_CAUSTICS,
+    FILE_VERSION_REFINED_MESH,
 };
 use radray::radiosity::solver::{self, Shooter};
 use radray::radiosity::{FormFactors, Solution};
@@ -502,9 +503,11 @@ fn foreign_file_is_refused() {
 
 #[test]
 fn unsupported_version_is_refused() {
-    // The next version after every one this radray reads (2, 3 for hierarchical leaf meshes, 4 for
-    // adaptive refined meshes).
-    let next = FILE_VERSION.max(FILE_VERSION_LEAF_MESH).max(FILE_VERSION_REFINED_MESH) + 1;
+    // The next version after every one this radray reads (2, 3 and 5 for hierarchical leaf meshes, 4
+    // for adaptive refined meshes).
+    let next =
+        FILE_VERSION.max(FILE_VERSION_LEAF_MESH).max(FILE_VERSION_REFINED_MESH).max(FILE_VERSION_LEAF_MESH_CAUSTICS)
+            + 1;
     let err = load_damaged(|b| b[FILE_MAGIC.len()..FILE_MAGIC.len() + 4].copy_from_slice(&next.to_le_bytes()), 0);
     assert!(
         matches!(err, SolutionFileError::UnsupportedVersion { found, supported: FILE_VERSION, .. } if found == next),

@@ -3,11 +3,14 @@
 //! elements (`leaf_mesh`), with the hierarchy's conforming vertex exitance; the direct part pass two
 //! needs for `direct = "pixel"` is estimated per leaf with shadow rays to the emitters.
 //!
-//! Mirrors and glass: the hierarchy transports diffuse light only. A specular surface takes part in it
-//! with its diffuse Kd (often 0: it absorbs what reaches it) and blocks visibility; light reaching
-//! diffuse surfaces through mirrors and glass (the full matrix's extended form factors) is missing from
-//! the solution. Pass two still traces mirrors and glass and adds the photons' caustics in `final`.
-//! `method = "auto"` therefore keeps such scenes on the full matrix whenever it fits.
+//! Mirrors and glass: the links carry diffuse light only; a specular surface takes part in them with
+//! its diffuse Kd (often 0: it absorbs what reaches it) and blocks visibility. Light that reaches
+//! diffuse surfaces from the emitters through mirrors and glass (LS+D) comes from photons traced over
+//! the input triangles (`caustic_tracer`, the same tracer as the full matrix's extended form factors
+//! to the emitters) and enters the solve as each leaf's reflected caustic light, which the links then
+//! carry on (`hierarchy::caustics`). Light between diffuse surfaces by way of mirrors and glass (DS+D,
+//! which the full matrix follows from its hemicubes) comes from a second set of photons sent from
+//! every surface's reflected light once the solve has converged.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -16,7 +19,10 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::fingerprint::Fnv1a64;
+use super::hierarchy::caustics::{CausticLight, CausticSources};
+use super::hierarchy::clusters::InputTriangles;
 use super::hierarchy::estimates::{EstimateHooks, EstimateLog};
+use super::hierarchy::nodes::Nodes;
 use super::hierarchy::part_file::{self, HierarchyPart};
 use super::hierarchy::shards::SharedEstimates;
 use super::hierarchy::{
@@ -36,7 +42,7 @@ use crate::rng::Pcg32;
 use crate::scene::{Material, Quality, SceneDescription, SolverKind};
 use crate::transport::emitters::Emitters;
 use crate::transport::hit::{leave_surface, offset_at};
-use crate::transport::photons::RunPhotons;
+use crate::transport::photons::{trace_photons, RunPhotons};
 
 /// Shadow rays per leaf for the direct part of its exitance.
 pub const DIRECT_SAMPLES: u32 = 16;
@@ -177,8 +183,53 @@ pub fn solution_on_leaves(
         stats,
         leaf_geometry: Some(Arc::new(geometry)),
         refinement: None,
+        holds_caustic_light: true,
     };
     (mesh, solution)
+}
+
+/// The hierarchy's source of caustic light (`hierarchy::caustics`): photons traced from the sources
+/// through the scene's mirrors and glass (`transport::photons::trace_photons`, the full matrix's and
+/// pass two's tracer, with its fixed seed) over a mesh whose elements are the input triangles (leaf
+/// geometry of one leaf per input triangle, so that a photon's element is its input triangle), each
+/// landing with flux Φ = (S/π)·throughput, S the exitance its source sends: the emission E, or for
+/// `CausticSources::ReflectedLight` the reflected exitance B − E of the input triangle's node.
+/// `None` when the scene has no mirror or glass (no mesh is built then) or nothing sends light.
+pub fn caustic_tracer(
+    scene: &SceneDescription,
+    textures: Arc<SceneTextures>,
+) -> impl Fn(&Nodes, &InputTriangles, CausticSources) -> Option<CausticLight> + Sync + '_ {
+    move |nodes, inputs, sources| {
+        if !scene.materials.iter().any(Material::is_specular) {
+            return None;
+        }
+        let corners: Vec<[Vec3; 3]> = inputs.node.iter().map(|&n| nodes.corners[n as usize]).collect();
+        let geometry = LeafGeometry {
+            positions: corners.iter().flatten().copied().collect(),
+            triangles: (0..corners.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
+            surface: inputs.surface.clone(),
+            back: inputs.back.clone(),
+        };
+        let mut mesh = leaf_mesh::build(scene, &geometry, textures.clone()).mesh;
+        if sources == CausticSources::ReflectedLight {
+            for (i, &n) in inputs.node.iter().enumerate() {
+                let n = n as usize;
+                let reflected = (nodes.exitance[n] - nodes.emission[n].as_dvec3()).max(DVec3::ZERO);
+                mesh.elements.emission[i] = reflected.as_vec3();
+            }
+        }
+        let accel = Accel::build(&mesh.positions, &mesh.triangles);
+        let photons = trace_photons(&mesh, &accel, &scene.materials, Some(&scene.surfaces), |count, trace| {
+            (0..count).into_par_iter().map(trace).collect()
+        })?;
+        let e = &mesh.elements;
+        let landings = photons
+            .landings
+            .iter()
+            .map(|l| (l.element, l.position, l.throughput * e.emission[l.source as usize] / std::f32::consts::PI))
+            .collect();
+        Some(CausticLight::new(landings, photons.rays))
+    }
 }
 
 /// The mesh of a loaded hierarchical solution (its leaf geometry), or `None` for a uniform one.
@@ -339,11 +390,13 @@ impl PassOneMethod for Hierarchical {
         };
         let mut hooks =
             EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: shared.as_ref() };
+        let tracer = caustic_tracer(scene, mesh.textures.clone());
         let solved = hierarchy::solve_logged(
             scene,
             mesh.textures.clone(),
             &params,
             kept.as_deref(),
+            Some(&tracer),
             &mut hooks,
             &mut |p| match p {
                 HierarchyProgress::Refining { pass, round, links, nodes } => {
@@ -474,6 +527,7 @@ impl PassOneMethod for Hierarchical {
             sweeps: h.sweeps,
             solve_seconds,
             hierarchy: Some(h.clone()),
+            specular_rays: h.caustic_rays,
             resume: resume_stats,
             ..Default::default()
         };
@@ -523,7 +577,8 @@ impl Hierarchical {
         let mut after_chunk = |_: &EstimateLog, computed: usize| (0..computed).for_each(|_| cancel.row_done());
         let mut hooks =
             EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: Some(&shared) };
-        let solved = hierarchy::solve_logged(scene, textures, &params, None, &mut hooks, &mut |p| {
+        let tracer = caustic_tracer(scene, textures.clone());
+        let solved = hierarchy::solve_logged(scene, textures, &params, None, Some(&tracer), &mut hooks, &mut |p| {
             if let HierarchyProgress::Refining { pass, round, links, nodes } = p {
                 stage.set_message(format!(
                     "shard {}/{} pass {pass} round {round}: {nodes} nodes, {links} links",

@@ -36,6 +36,12 @@ pub struct Solution {
     /// For an adaptive solution: the levels of splits that made its mesh from the scene's patch mesh
     /// (`adaptive::refinement::mesh_of` rebuilds it); `None` otherwise.
     pub refinement: Option<Arc<Refinement>>,
+    /// Whether the exitance holds the light that reached diffuse surfaces from the emitters through
+    /// mirrors and glass (LS+D): the uniform and adaptive meshes' solutions do (extended form factors),
+    /// and so do hierarchical ones since session 23 (`hierarchy::caustics`); a hierarchical solution
+    /// file of an older format (version 3) does not. Pass two then adds all of that light from its
+    /// caustic map rather than only the detail the elements miss.
+    pub holds_caustic_light: bool,
 }
 
 fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
@@ -43,13 +49,6 @@ fn to_f32(values: &[DVec3]) -> Vec<Vec3> {
 }
 
 impl Solution {
-    /// Whether the exitance holds the light that reached diffuse surfaces through mirrors and glass
-    /// (LS+D, by extended form factors): the uniform and adaptive meshes' solutions do, the hierarchy's
-    /// (`leaf_geometry`) transports diffuse light only.
-    pub fn holds_caustic_light(&self) -> bool {
-        self.leaf_geometry.is_none()
-    }
-
     /// Bytes held by the solution (its four arrays, an adaptive refinement's split indices and the
     /// struct).
     pub fn memory_bytes(&self) -> u64 {
@@ -83,6 +82,7 @@ impl Solution {
             stats,
             leaf_geometry: None,
             refinement: None,
+            holds_caustic_light: true,
         }
     }
 
@@ -103,6 +103,7 @@ impl Solution {
             },
             leaf_geometry: None,
             refinement: None,
+            holds_caustic_light: true,
         }
     }
 

@@ -27,13 +27,17 @@ pub const FILE_VERSION_LEAF_MESH: u32 = 3;
 /// Version of a file that also carries the refinement of an adaptive solution (`Refinement`): version
 /// 2's layout with the level and split counts after the header and the levels before the checksum.
 pub const FILE_VERSION_REFINED_MESH: u32 = 4;
+/// Version of a hierarchical solution whose exitance holds the light that reached diffuse surfaces
+/// through mirrors and glass (`Solution::holds_caustic_light`): version 3's layout. A version 3 file
+/// is still read, as a solution without that light (pass two then adds all of it).
+pub const FILE_VERSION_LEAF_MESH_CAUSTICS: u32 = 5;
 
 /// Which mesh a solution file's values live on, read from its format version.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SolutionMesh {
     /// The scene's uniform mesh (version 2).
     Uniform,
-    /// The leaf mesh of a hierarchical solution, which the file carries (version 3).
+    /// The leaf mesh of a hierarchical solution, which the file carries (version 3 or 5).
     Leaves,
     /// The scene's patch mesh refined as the file's adaptive refinement says (version 4).
     Refined,
@@ -86,7 +90,8 @@ impl Solution {
     /// end−8   8        FNV-1a 64 of every byte before it
     /// ```
     ///
-    /// A hierarchical solution (with `leaf_geometry`) is written as version `FILE_VERSION_LEAF_MESH`:
+    /// A hierarchical solution (with `leaf_geometry`) is written as version
+    /// `FILE_VERSION_LEAF_MESH_CAUSTICS` (`FILE_VERSION_LEAF_MESH` if it does not hold caustic light):
     /// after the header (at 56) the leaf mesh's position count p and leaf count t (u64 each), and
     /// before the checksum 12p leaf positions (3 × f32), 12t leaf corners (3 × u32), 4t scene surfaces
     /// (u32) and t back-side flags (u8, 0 or 1); t equals n.
@@ -103,6 +108,7 @@ impl Solution {
         out.extend_from_slice(&FILE_MAGIC);
         assert!(self.leaf_geometry.is_none() || self.refinement.is_none(), "a solution has one own mesh");
         let version = match (&self.leaf_geometry, &self.refinement) {
+            (Some(_), _) if self.holds_caustic_light => FILE_VERSION_LEAF_MESH_CAUSTICS,
             (Some(_), _) => FILE_VERSION_LEAF_MESH,
             (None, Some(_)) => FILE_VERSION_REFINED_MESH,
             (None, None) => FILE_VERSION,
@@ -188,7 +194,9 @@ impl Solution {
             actual_bytes: bytes.len() as u64,
         };
         let version = r.u32().ok_or_else(truncated_header)?;
-        if ![FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_REFINED_MESH].contains(&version) {
+        if ![FILE_VERSION, FILE_VERSION_LEAF_MESH, FILE_VERSION_REFINED_MESH, FILE_VERSION_LEAF_MESH_CAUSTICS]
+            .contains(&version)
+        {
             return Err(SolutionFileError::UnsupportedVersion {
                 path: path(),
                 found: version,
@@ -202,7 +210,7 @@ impl Solution {
         let iterations = r.u32().ok_or_else(truncated_header)?;
         let converged = r.u32().ok_or_else(truncated_header)?;
         let h = r.u64().ok_or_else(truncated_header)?;
-        let leaf_mesh = version == FILE_VERSION_LEAF_MESH;
+        let leaf_mesh = [FILE_VERSION_LEAF_MESH, FILE_VERSION_LEAF_MESH_CAUSTICS].contains(&version);
         let refined = version == FILE_VERSION_REFINED_MESH;
         let (p, t) = if leaf_mesh {
             (r.u64().ok_or_else(truncated_header)?, r.u64().ok_or_else(truncated_header)?)
@@ -296,6 +304,7 @@ impl Solution {
                 stats: SolveStats { solver, iterations, residual_history, converged },
                 leaf_geometry: leaf_geometry.map(Arc::new),
                 refinement: refinement.map(Arc::new),
+                holds_caustic_light: version != FILE_VERSION_LEAF_MESH,
             },
             _ => return Err(corrupted("data shorter than its header says")),
         };
@@ -375,7 +384,7 @@ pub fn solution_mesh(path: &Path) -> Result<SolutionMesh, SolutionFileError> {
         return Ok(SolutionMesh::Uniform);
     }
     Ok(match u32::from_le_bytes([head[8], head[9], head[10], head[11]]) {
-        FILE_VERSION_LEAF_MESH => SolutionMesh::Leaves,
+        FILE_VERSION_LEAF_MESH | FILE_VERSION_LEAF_MESH_CAUSTICS => SolutionMesh::Leaves,
         FILE_VERSION_REFINED_MESH => SolutionMesh::Refined,
         _ => SolutionMesh::Uniform,
     })
@@ -449,6 +458,7 @@ mod tests {
             },
             leaf_geometry: None,
             refinement: None,
+            holds_caustic_light: true,
         }
     }
 
@@ -466,6 +476,23 @@ mod tests {
     fn sample_with_refinement() -> Solution {
         let levels = vec![LevelSplits { elements: 2, split: vec![0, 1] }, LevelSplits { elements: 8, split: vec![7] }];
         Solution { refinement: Some(Arc::new(Refinement { levels })), ..sample() }
+    }
+
+    /// Only a leaf mesh moves the version: a hierarchical solution is written as version 5 when its
+    /// exitance holds the caustic light and as version 3 when not (as older files are); each reads
+    /// back with its leaves, its flag and the same bytes.
+    #[test]
+    fn a_leaf_mesh_round_trips_and_its_version_says_whether_it_holds_caustic_light() {
+        assert_eq!(sample().to_bytes()[8..12], FILE_VERSION.to_le_bytes());
+        for (holds, version) in [(true, FILE_VERSION_LEAF_MESH_CAUSTICS), (false, FILE_VERSION_LEAF_MESH)] {
+            let s = Solution { holds_caustic_light: holds, ..sample_with_leaves() };
+            let bytes = s.to_bytes();
+            assert_eq!(bytes[8..12], version.to_le_bytes());
+            let back = Solution::from_bytes(&bytes, Path::new("x"), s.mesh_fingerprint).unwrap();
+            assert_eq!(back.holds_caustic_light, holds);
+            assert_eq!(back.leaf_geometry, s.leaf_geometry);
+            assert_eq!(back.to_bytes(), bytes);
+        }
     }
 
     #[test]
@@ -509,17 +536,6 @@ mod tests {
         bytes.extend_from_slice(&checksum.to_le_bytes());
         let e = Solution::from_bytes(&bytes, Path::new("x"), sample().mesh_fingerprint).unwrap_err();
         assert!(matches!(e, SolutionFileError::Corrupted { .. }), "{e:?}");
-    }
-
-    #[test]
-    fn a_leaf_mesh_round_trips_and_only_it_moves_the_version() {
-        assert_eq!(sample().to_bytes()[8..12], FILE_VERSION.to_le_bytes());
-        let s = sample_with_leaves();
-        let bytes = s.to_bytes();
-        assert_eq!(bytes[8..12], FILE_VERSION_LEAF_MESH.to_le_bytes());
-        let back = Solution::from_bytes(&bytes, Path::new("x"), s.mesh_fingerprint).unwrap();
-        assert_eq!(back.leaf_geometry, s.leaf_geometry);
-        assert_eq!(back.to_bytes(), bytes);
     }
 
     #[test]

@@ -89,7 +89,7 @@ impl<'a> Diffuse<'a> {
     /// The estimator needs the direct irradiance at the hit (`radiance`'s `direct_irradiance`).
     /// Whether the solution holds the caustic light at element resolution (`Solution::holds_caustic_light`).
     pub fn holds_caustic_light(&self) -> bool {
-        self.solution.holds_caustic_light()
+        self.solution.holds_caustic_light
     }
 
     pub fn needs_direct_light(&self) -> bool {

@@ -409,7 +409,7 @@ impl<'a> Tracer<'a> {
                 // Caustic light (LS+D): without a gather, the detail the element solution misses, the map's
                 // light at pixel resolution minus the same at element resolution; with a gather, all of
                 // it, since the gather leaves the paths through mirrors and glass to an emitter to the map
-                // (`gather_radiance`); all of it too over a solution without it (the hierarchy's).
+                // (`gather_radiance`); all of it too over a solution without it (a hierarchical solution file from before session 23).
                 let caustic = match &self.caustics {
                     Some(map) if reflectance.max_element() > 0.0 => {
                         let in_solution = if self.gather.is_none() && self.diffuse.holds_caustic_light() {

@@ -151,6 +151,7 @@ pub fn solution(mesh: &Mesh, exitance: Vec<Vec3>, direct: Vec<Vec3>) -> Solution
         },
         leaf_geometry: None,
         refinement: None,
+        holds_caustic_light: true,
     }
 }
 

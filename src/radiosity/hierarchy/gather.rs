@@ -765,19 +765,20 @@ pub fn push_step(
     Pushed { uniform: uniform + oriented, lo: hi, hi }
 }
 
-/// A leaf's overrelaxed update: B ← B + ω·(E + ρ·G − B), clamped at 0 (ω > 1 may overshoot below
-/// zero on the first sweeps). ω = 1 is the plain Gauss-Seidel/Jacobi update B = E + ρG.
-pub fn leaf_exitance(emission: DVec3, reflectance: DVec3, irradiance: DVec3, old: DVec3, relaxation: f64) -> DVec3 {
-    let target = emission + reflectance * irradiance;
+/// A leaf's overrelaxed update: B ← B + ω·(S + ρ·G − B), clamped at 0 (ω > 1 may overshoot below
+/// zero on the first sweeps), S its emission and reflected caustic light (`Nodes::source_exitance`).
+/// ω = 1 is the plain Gauss-Seidel/Jacobi update B = S + ρG.
+pub fn leaf_exitance(source: DVec3, reflectance: DVec3, irradiance: DVec3, old: DVec3, relaxation: f64) -> DVec3 {
+    let target = source + reflectance * irradiance;
     (old + (target - old) * relaxation).max(DVec3::ZERO)
 }
 
 /// Push-pull over the tree below `root` (one Jacobi step of the hierarchical system): pushes
 /// `own_irradiance` down (`push_step`: a node's uniform part lands on its open part, a cluster's
 /// arrivals reach each member by its own cosine; a node with no open area gets nothing), sets each
-/// leaf to E + ρ·G_total and pulls open-area-weighted means up (`pulled`):
+/// leaf to S + ρ·G_total (S = E + ρ·E_c, `Nodes::source_exitance`) and pulls open-area-weighted means up (`pulled`):
 ///
-/// B_leaf = E + ρ·Σ_{a ∈ ancestors(leaf) ∪ {leaf}} [(A_a/A_open,a)·U_a + Σ_{l ∈ arrivals(a)} w_l·max(0,
+/// B_leaf = S + ρ·Σ_{a ∈ ancestors(leaf) ∪ {leaf}} [(A_a/A_open,a)·U_a + Σ_{l ∈ arrivals(a)} w_l·max(0,
 /// n_leaf·ω_l)],  B_inner = Σ_c A_open,c B_c / Σ_c A_open,c.
 ///
 /// Writes `exitance` for every node below `root` and returns the irradiance per node as pushed: for an
@@ -822,7 +823,7 @@ pub fn push_pull(nodes: &Nodes, root: usize, own_irradiance: &[Irradiance], exit
     }
     for &n in order.iter().rev() {
         exitance[n] = if nodes.is_leaf(n) {
-            leaf_exitance(nodes.emission[n].as_dvec3(), nodes.reflectance[n].as_dvec3(), total[n], exitance[n], 1.0)
+            leaf_exitance(nodes.source_exitance(n), nodes.reflectance[n].as_dvec3(), total[n], exitance[n], 1.0)
         } else {
             pulled(nodes, n, exitance)
         };

@@ -18,6 +18,7 @@
 //!
 //! The hemicube is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
 
+pub mod caustics;
 pub mod clusters;
 pub mod contact;
 pub mod edge_angle;
@@ -48,6 +49,7 @@ use glam::{DVec3, Vec3};
 use crate::accel::Accel;
 use crate::material::SceneTextures;
 use crate::scene::SceneDescription;
+use caustics::{CausticLight, CausticSources, CausticTracer};
 use contact::{split_at_contacts, ContactProbe};
 use estimates::{EstimateHooks, EstimateLog, Stopped};
 use gather::ArrivalScales;
@@ -256,6 +258,10 @@ pub struct HierarchyStats {
     pub reference_exitance: f64,
     /// Σ A·E over the input triangles (W, mean channel).
     pub reference_power_w: f64,
+    /// Photons that brought caustic light (through mirrors and glass) to the input triangles, and
+    /// the rays traced for them (`caustics`; zero without a tracer or specular surfaces).
+    pub caustic_photons: usize,
+    pub caustic_rays: u64,
 }
 
 /// Progress of a solve, for a progress bar or log lines.
@@ -401,7 +407,7 @@ pub fn solve_reusing(
 ) -> Result<(HierarchicalSolution, LinkStructure), HierarchyError> {
     let mut log = EstimateLog::default();
     let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {}, shared: None };
-    solve_logged(scene, textures, params, reuse, &mut hooks, on_progress)
+    solve_logged(scene, textures, params, reuse, None, &mut hooks, on_progress)
 }
 
 /// `solve_reusing` with every link estimate going through `hooks.log` (`estimates`): a log from an
@@ -411,11 +417,15 @@ pub fn solve_reusing(
 /// the log holding every estimate made so far (the caller's checkpoint). With `hooks.shared` it is a
 /// shard (runs the passes before its own whole, refines its own for its receivers and stops, that
 /// pass unswept) or a merge (the whole solve, with the shards' pure estimates; see `shards`).
+/// With `caustics`, the light it traces through mirrors and glass to the input triangles is a source
+/// term of every leaf it lands in (`caustics`: B = E + ρ·(G + E_c)); without, the solve carries
+/// diffuse light only (`solve`, `solve_reusing`).
 pub fn solve_logged(
     scene: &SceneDescription,
     textures: Arc<SceneTextures>,
     params: &HierarchyParams,
     reuse: Option<&LinkStructure>,
+    caustics: Option<&CausticTracer>,
     hooks: &mut EstimateHooks,
     on_progress: &mut dyn FnMut(HierarchyProgress),
 ) -> Result<(HierarchicalSolution, LinkStructure), HierarchyError> {
@@ -466,13 +476,18 @@ pub fn solve_logged(
         split_at_contacts(&mut nodes, &inputs.node, &probe, min_element_area, max_nodes);
         nodes.assign_texture_means(first_piece);
     }
+    let caustic_light: Option<CausticLight> =
+        caustics.and_then(|trace| trace(&nodes, &inputs, CausticSources::Emitters));
     let mut stats = HierarchyStats {
         input_triangles: inputs.node.len(),
         clusters: nodes.is_cluster.iter().filter(|&&c| c).count(),
         reference_exitance,
         reference_power_w,
+        caustic_photons: caustic_light.as_ref().map_or(0, CausticLight::len),
+        caustic_rays: caustic_light.as_ref().map_or(0, |c| c.rays),
         ..Default::default()
     };
+    set_caustic_light(&mut nodes, &inputs, caustic_light.as_ref());
     solve::reset_to_emission(&mut nodes, root);
     let build_nodes = nodes.len();
     // A shard (`shards`) stops after refining its pass for its receivers.
@@ -531,6 +546,7 @@ pub fn solve_logged(
                     break;
                 }
                 let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
+                set_caustic_light(&mut nodes, &inputs, caustic_light.as_ref());
                 sweep_pass(&mut nodes, &links, &current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
                 scales = Some(current);
             }
@@ -570,9 +586,22 @@ pub fn solve_logged(
                 links = Links::from_records(nodes.len(), records);
                 stats.add_refinement(pass, &outcome, error_after_w);
                 let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
+                set_caustic_light(&mut nodes, &inputs, caustic_light.as_ref());
                 sweep_pass(&mut nodes, &links, &current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
                 scales = Some(current);
             }
+        }
+    }
+    // Light between diffuse surfaces through mirrors and glass (`caustics`): once the solve has
+    // converged, photons from every surface's reflected light join the emitters', and the last links
+    // are swept again (a shard, which stops unswept, leaves this to its merge).
+    if let (Some(trace), Some(current), Some(first)) = (caustics, scales.as_ref(), caustic_light) {
+        if let Some(reflected) = trace(&nodes, &inputs, CausticSources::ReflectedLight) {
+            stats.caustic_photons += reflected.len();
+            stats.caustic_rays += reflected.rays;
+            set_caustic_light(&mut nodes, &inputs, Some(&first.merged(reflected)));
+            let pass = stats.refinement_passes;
+            sweep_pass(&mut nodes, &links, current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
         }
     }
     // The leaves' exitance with each element receiver's links spread by position (the solved
@@ -605,6 +634,15 @@ impl HierarchyStats {
         self.budget_exceeded |= outcome.budget_exceeded;
         self.peak_bytes = self.peak_bytes.max(outcome.peak_bytes);
         self.error_after_pass_w.push(error_after_w);
+    }
+}
+
+/// Gives every node its caustic irradiance from `light` (`caustics`), or none: after each refinement,
+/// since the photons fall into the new leaves.
+fn set_caustic_light(nodes: &mut Nodes, inputs: &clusters::InputTriangles, light: Option<&CausticLight>) {
+    if let Some(light) = light {
+        let irradiance = light.node_irradiance(nodes, inputs);
+        nodes.set_caustic_irradiance(irradiance);
     }
 }
 

@@ -17,7 +17,7 @@ pub const NODE_BYTES: usize = std::mem::size_of::<bool>()
     + 3 * std::mem::size_of::<u32>()
     + std::mem::size_of::<u8>() * 2
     + std::mem::size_of::<[Vec3; 3]>()
-    + 4 * std::mem::size_of::<Vec3>()
+    + 5 * std::mem::size_of::<Vec3>()
     + 4 * std::mem::size_of::<f32>()
     + 2 * std::mem::size_of::<DVec3>()
     + std::mem::size_of::<f64>();
@@ -45,6 +45,10 @@ pub struct Nodes {
     pub reflectance: Vec<Vec3>,
     /// Emitted exitance E = π·Ke, W/m² (area-weighted mean for a cluster).
     pub emission: Vec<Vec3>,
+    /// Caustic irradiance E_c (W/m², before reflection): light that reached the node's open part
+    /// through mirrors and glass rather than over links (`caustics`); zero for clusters and without
+    /// caustic light. Set by `set_caustic_irradiance`; new pieces start at zero until it is set again.
+    pub caustic_irradiance: Vec<Vec3>,
     /// Surface area (sum over the contents for a cluster).
     pub area: Vec<f32>,
     /// The part of `area` that is open (m²): not inside a closed object resting on it (`contact`),
@@ -91,6 +95,19 @@ impl Nodes {
 
     pub fn is_leaf(&self, node: usize) -> bool {
         self.first_child[node] == NONE
+    }
+
+    /// What a leaf sends out of light that does not arrive over its links: S = E + ρ·E_c, its
+    /// emission and its reflected caustic light (W/m²). The sweeps solve B = S + ρ·G.
+    pub fn source_exitance(&self, node: usize) -> DVec3 {
+        (self.emission[node] + self.reflectance[node] * self.caustic_irradiance[node]).as_dvec3()
+    }
+
+    /// Sets every node's caustic irradiance (`caustics::CausticLight::node_irradiance`, one value
+    /// per node).
+    pub fn set_caustic_irradiance(&mut self, irradiance: Vec<Vec3>) {
+        assert_eq!(irradiance.len(), self.len(), "one caustic irradiance per node");
+        self.caustic_irradiance = irradiance;
     }
 
     /// A/A_open: what the irradiance a node's links bring (a mean over all of it, the hidden part
@@ -244,6 +261,7 @@ impl Nodes {
         self.centre.push(n.centre);
         self.reflectance.push(n.reflectance);
         self.emission.push(n.emission);
+        self.caustic_irradiance.push(Vec3::ZERO);
         self.area.push(n.area);
         self.open_area.push(n.area);
         self.radius.push(n.radius);

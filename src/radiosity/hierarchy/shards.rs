@@ -376,7 +376,7 @@ mod tests {
             let mut log = EstimateLog::default();
             let mut hooks = EstimateHooks { log: &mut log, stop: &|| false, after_chunk: &mut |_, _| {}, shared };
             let (solution, _) =
-                solve_logged(&scene, Default::default(), &params, None, &mut hooks, &mut |_| {}).unwrap();
+                solve_logged(&scene, Default::default(), &params, None, None, &mut hooks, &mut |_| {}).unwrap();
             (solution, log.computed as u64)
         };
         let (single, single_estimates) = run(None);

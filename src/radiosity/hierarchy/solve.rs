@@ -19,7 +19,8 @@ pub struct SweepChange {
 /// One in-place sweep over the tree below `root` with relaxation factor ω:
 ///
 /// G_n = G_parent + Σ_{S linked to n} F_nS B_S (a cluster's links as arrivals that each element below
-/// takes by its own cosine, see `gather::Irradiance`);  leaves: B ← B + ω(E + ρG − B);
+/// takes by its own cosine, see `gather::Irradiance`);  leaves: B ← B + ω(S + ρG − B), S = E + ρ·E_c
+/// the emission and reflected caustic light (`Nodes::source_exitance`);
 /// inner nodes: B = Σ_c A_c B_c / Σ_c A_c (after their children).
 ///
 /// `scales` are the links' `ArrivalScales`. Serial and in a fixed order, so the result does not
@@ -50,13 +51,8 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, scales: &ArrivalScales, root: usi
         let g = push_step(nodes, n, down, own_uniform, std::mem::take(&mut pending[n]), &arrivals);
         if nodes.is_leaf(n) {
             let old = nodes.exitance[n];
-            let new = leaf_exitance(
-                nodes.emission[n].as_dvec3(),
-                nodes.reflectance[n].as_dvec3(),
-                g.uniform,
-                old,
-                relaxation,
-            );
+            let new =
+                leaf_exitance(nodes.source_exitance(n), nodes.reflectance[n].as_dvec3(), g.uniform, old, relaxation);
             nodes.exitance[n] = new;
             nodes.exitance_mean[n] = mean_channel(new);
             change.max_change = change.max_change.max((new - old).abs().max_element());
@@ -115,8 +111,9 @@ pub fn solve_until(
     Some((max_sweeps, false))
 }
 
-/// Sets every leaf to its emission and pulls the means up: the exitance that the first refinement
-/// pass measures link errors with (B = E before any bounce).
+/// Sets every leaf to its emission and reflected caustic light and pulls the means up: the exitance
+/// that the first refinement pass measures link errors with (B = S = E + ρ·E_c before any bounce over
+/// links).
 pub fn reset_to_emission(nodes: &mut Nodes, root: usize) {
     let mut order = Vec::new();
     let mut stack = vec![root];
@@ -125,7 +122,7 @@ pub fn reset_to_emission(nodes: &mut Nodes, root: usize) {
         stack.extend(nodes.children(n));
     }
     for &n in order.iter().rev() {
-        let b = if nodes.is_leaf(n) { nodes.emission[n].as_dvec3() } else { pulled(nodes, n, &nodes.exitance) };
+        let b = if nodes.is_leaf(n) { nodes.source_exitance(n) } else { pulled(nodes, n, &nodes.exitance) };
         nodes.exitance[n] = b;
         nodes.exitance_mean[n] = mean_channel(b);
     }
