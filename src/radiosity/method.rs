@@ -368,8 +368,8 @@ pub fn auto_prefers_adaptive(scene: &SceneDescription, reader: SolutionReader) -
 /// (`form_factors::matrix_bytes_from_counts`, every element a row) exceeds the `memory` budget or the
 /// memory available, or when its hemicubes, predicted from a sample of them drawn on the uniform mesh
 /// (`matrix_estimate`), would take more than `AUTO_MATRIX_CPU_SECONDS` of CPU time
-/// (`AUTO_MATRIX_CPU_SECONDS_SPECULAR` when the mesh has mirrors or glass: the hierarchy transports
-/// diffuse light only, so it would lose the light through them).
+/// (`AUTO_MATRIX_CPU_SECONDS_SPECULAR` when the mesh has mirrors or glass: the hierarchy carries the
+/// light through them less completely, by photons).
 pub fn auto_prefers_hierarchy(scene: &SceneDescription) -> Option<String> {
     uniform_outlook(scene).err()
 }

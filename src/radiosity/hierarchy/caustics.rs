@@ -77,16 +77,21 @@ impl CausticLight {
         self.input.is_empty()
     }
 
-    /// Per node, the caustic irradiance E_c (W/m², before reflection) on its open part: the flux of
-    /// the photons inside it over its open area (`Nodes::open_area`; its area when none is open).
-    /// Each photon is followed from its input triangle's node down the 1→4 subdivisions to the leaf
-    /// that holds it (`child_holding`), counting on every node it passes. A node's children take
-    /// their own estimates only when each holds at least `NODE_PHOTONS` photons; otherwise every node
-    /// below it takes its irradiance, so that weak, spread light (a mirror ball's over a room, the
-    /// light reflected through glass) is not grain on small leaves while a dense focus keeps the
-    /// leaves' resolution. Either way each cut node's flux lands on its open area, Σ A_open·E_c over
-    /// the leaves = Σ Φ. Clusters get zero.
-    pub fn node_irradiance(&self, nodes: &Nodes, inputs: &InputTriangles) -> Vec<Vec3> {
+    /// Per node, the caustic irradiance E_c (W/m², before reflection) on the open part of its
+    /// receiving members (elements that reflect, ρ > 0: only they catch photons). Each photon is
+    /// followed from its input triangle's node down the 1→4 subdivisions to the leaf that holds it
+    /// (`child_holding`), and counted on every node from there up to `root`. Going down from `root`,
+    /// a node's children take their own estimates when each of them that receives holds at least
+    /// `NODE_PHOTONS` photons, or when their counts say the light is not even over the node (a child
+    /// holds n_c photons where an even density would give m_c = n·A_c/A, and |n_c − m_c| >
+    /// 3·√(m_c + 1), a Poisson count's 3σ, as the caustic map's kernels decide); otherwise the node is
+    /// cut there, and every receiving leaf below it takes Φ_cut / A_receiving,cut. Weak, spread light (a mirror ball's over a room, the light
+    /// reflected through glass, photons a few per input triangle of a finely tessellated wall) is then
+    /// spread over a cluster of neighbours rather than grain on single triangles, while a dense focus,
+    /// or a patch of light beside a dim corner, keeps its edge. The clusters split the two sides of two-sided surfaces first
+    /// (`clusters`), so light never crosses to a back side. Power is kept exactly: Σ over the
+    /// receiving leaves of A_open·E_c = Σ Φ.
+    pub fn node_irradiance(&self, nodes: &Nodes, inputs: &InputTriangles, root: usize) -> Vec<Vec3> {
         let mut flux = vec![DVec3::ZERO; nodes.len()];
         let mut count = vec![0u32; nodes.len()];
         for k in 0..self.len() {
@@ -101,29 +106,51 @@ impl CausticLight {
                 }
             }
         }
-        let irradiance = |n: usize| {
-            let area = if nodes.open_area[n] > 0.0 { nodes.open_area[n] } else { nodes.area[n] };
-            if flux[n] == DVec3::ZERO || !(area > 0.0) {
-                Vec3::ZERO
+        // Receiving open area per node, and the clusters' photons: children come after their
+        // parent, so one pass in reverse index order sees every child first.
+        let mut receiving = vec![0.0f64; nodes.len()];
+        for n in (0..nodes.len()).rev() {
+            if nodes.is_leaf(n) {
+                let open = if nodes.open_area[n] > 0.0 { nodes.open_area[n] } else { nodes.area[n] };
+                receiving[n] = if nodes.reflectance_max[n] > 0.0 { open as f64 } else { 0.0 };
             } else {
-                (flux[n] / area as f64).as_vec3()
+                receiving[n] = nodes.children(n).map(|c| receiving[c]).sum();
+                if nodes.is_cluster[n] {
+                    flux[n] = nodes.children(n).map(|c| flux[c]).sum();
+                    count[n] = nodes.children(n).map(|c| count[c]).sum();
+                }
             }
+        }
+        let irradiance = |n: usize| if receiving[n] > 0.0 { (flux[n] / receiving[n]).as_vec3() } else { Vec3::ZERO };
+        // Whether node n's receiving children take their own estimates: each holds `NODE_PHOTONS`, or
+        // one holds a count that a density even over n would give with Poisson odds beyond 3σ.
+        let children_resolve = |n: usize| {
+            let mut receivers = nodes.children(n).filter(|&c| receiving[c] > 0.0).peekable();
+            receivers.peek().is_none()
+                || nodes.children(n).filter(|&c| receiving[c] > 0.0).all(|c| count[c] >= NODE_PHOTONS)
+                || receivers.any(|c| {
+                    let expected = count[n] as f64 * receiving[c] / receiving[n];
+                    (count[c] as f64 - expected).abs() > 3.0 * (expected + 1.0).sqrt()
+                })
         };
         let mut out = vec![Vec3::ZERO; nodes.len()];
-        // Top-down from each input triangle that photons reached: (node, the cut node above it, if any).
-        let mut stack: Vec<(usize, Option<usize>)> =
-            inputs.node.iter().map(|&n| n as usize).filter(|&n| count[n] > 0).map(|n| (n, None)).collect();
+        // Top-down: (node, the cut node above it, if any); subtrees without photons stay dark.
+        let mut stack: Vec<(usize, Option<usize>)> = vec![(root, None)];
         while let Some((n, cut)) = stack.pop() {
-            let cut = cut.or_else(|| nodes.children(n).any(|c| count[c] < NODE_PHOTONS).then_some(n));
-            out[n] = irradiance(cut.unwrap_or(n));
+            if cut.is_none() && count[n] == 0 {
+                continue;
+            }
+            let cut = cut.or_else(|| (!children_resolve(n)).then_some(n));
+            let receives = !nodes.is_leaf(n) || receiving[n] > 0.0;
+            out[n] = if receives { irradiance(cut.unwrap_or(n)) } else { Vec3::ZERO };
             stack.extend(nodes.children(n).map(|c| (c, cut)));
         }
         out
     }
 }
 
-/// Photons each child of a node must hold for the children to take their own caustic irradiance
-/// (`CausticLight::node_irradiance`): a relative noise of about 1/√32 ≈ 18 % at most.
+/// Photons each receiving child of a node must hold for the children to take their own caustic
+/// irradiance (`CausticLight::node_irradiance`): a relative noise of about 1/√32 ≈ 18 % at most.
 pub const NODE_PHOTONS: u32 = 32;
 
 /// The child of element `node` whose triangle holds `p` (the largest smallest barycentric weight, so
@@ -185,7 +212,7 @@ mod tests {
     fn dense_photons_light_the_leaf_that_holds_them_and_keep_their_power() {
         let (nodes, inputs, root, _, grand) = split_triangle();
         let light = photons_on_leaves(&nodes, NODE_PHOTONS);
-        let e = light.node_irradiance(&nodes, &inputs);
+        let e = light.node_irradiance(&nodes, &inputs, root);
         let leaf_flux = Vec3::new(1.0, 2.0, 3.0) * NODE_PHOTONS as f32;
         for n in (0..nodes.len()).filter(|&n| nodes.is_leaf(n)) {
             assert!((e[n] * nodes.area[n] - leaf_flux).abs().max_element() < 1e-3, "leaf {n}: {}", e[n]);
@@ -203,12 +230,45 @@ mod tests {
         let (nodes, inputs, root, corner, grand) = split_triangle();
         let points = [Vec3::new(0.2, 0.3, 0.0), Vec3::new(3.0, 0.5, 0.0), Vec3::new(0.5, 0.5, 0.0)];
         let light = CausticLight::new(points.iter().map(|&p| (0, p, Vec3::new(1.0, 2.0, 3.0))).collect(), 3);
-        let e = light.node_irradiance(&nodes, &inputs);
+        let e = light.node_irradiance(&nodes, &inputs, root);
         let mean = Vec3::new(3.0, 6.0, 9.0) / nodes.area[root];
         for n in [root, corner, grand, grand + 3] {
             assert!((e[n] - mean).abs().max_element() < 1e-6, "node {n}: {} against {mean}", e[n]);
         }
         assert!((leaf_power(&nodes, &e) - Vec3::new(3.0, 6.0, 9.0)).abs().max_element() < 1e-4);
+    }
+
+    /// A cluster of two grey triangles and a black one, with photons on one grey triangle only: five
+    /// are too few to tell the light from even (expected 2.5 on each, 5 and 0 are within 3σ), so the
+    /// cluster is cut, both grey triangles take the same irradiance and the black one none; twenty
+    /// are not even (20 and 0 against 10), so each triangle keeps its own. The grey ones' power is
+    /// the photons' either way.
+    #[test]
+    fn photons_spread_over_a_clusters_receiving_members_only_where_the_light_looks_even() {
+        let mut nodes = Nodes::default();
+        let root = nodes.push_cluster_slot() as usize;
+        let grey = Vec3::splat(0.5);
+        let tri = |x: f32| [Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 0.0, 0.0), Vec3::new(x, 1.0, 0.0)];
+        let first = nodes.push_element(tri(0.0), 0, 0, grey, Vec3::ZERO);
+        nodes.push_element(tri(2.0), 1, 0, grey, Vec3::ZERO);
+        nodes.push_element(tri(4.0), 2, 0, Vec3::ZERO, Vec3::ZERO);
+        nodes.set_cluster_children(root, first, 3);
+        let inputs = InputTriangles {
+            surface: vec![0, 1, 2],
+            back: vec![false; 3],
+            material: vec![0, 0, 1],
+            node: vec![first, first + 1, first + 2],
+        };
+        let (a, b, black) = (first as usize, first as usize + 1, first as usize + 2);
+        let power = Vec3::new(1.0, 2.0, 3.0);
+        for (photons, spread) in [(5, true), (20, false)] {
+            let light = CausticLight::new(vec![(0, Vec3::new(0.2, 0.2, 0.0), power); photons], 0);
+            let e = light.node_irradiance(&nodes, &inputs, root);
+            assert_eq!(e[a] == e[b], spread, "{photons} photons: {} and {}", e[a], e[b]);
+            assert_eq!(e[black], Vec3::ZERO);
+            let total = e[a] * nodes.area[a] + e[b] * nodes.area[b];
+            assert!((total - power * photons as f32).abs().max_element() < 1e-4, "{total}");
+        }
     }
 
     /// No photons: nothing lights anything.
@@ -217,7 +277,7 @@ mod tests {
         let mut nodes = Nodes::default();
         let root = nodes.push_element([Vec3::ZERO, Vec3::X, Vec3::Y], 0, 0, Vec3::ONE, Vec3::ZERO);
         let inputs = InputTriangles { surface: vec![0], back: vec![false], material: vec![0], node: vec![root] };
-        let e = CausticLight::default().node_irradiance(&nodes, &inputs);
+        let e = CausticLight::default().node_irradiance(&nodes, &inputs, root as usize);
         assert_eq!(e, vec![Vec3::ZERO]);
     }
 }

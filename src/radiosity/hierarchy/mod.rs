@@ -17,6 +17,9 @@
 //!   a sampled estimator exact in each sampled source element (`visibility::sampled_form_factor`).
 //!
 //! The hemicube is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
+//!
+//! Light through mirrors and glass, which no link carries, enters as photons landing in the leaves
+//! (`caustics`), traced by the caller (`solve_logged`'s `CausticTracer`).
 
 pub mod caustics;
 pub mod clusters;
@@ -487,7 +490,7 @@ pub fn solve_logged(
         caustic_rays: caustic_light.as_ref().map_or(0, |c| c.rays),
         ..Default::default()
     };
-    set_caustic_light(&mut nodes, &inputs, caustic_light.as_ref());
+    set_caustic_light(&mut nodes, &inputs, root, caustic_light.as_ref());
     solve::reset_to_emission(&mut nodes, root);
     let build_nodes = nodes.len();
     // A shard (`shards`) stops after refining its pass for its receivers.
@@ -546,7 +549,7 @@ pub fn solve_logged(
                     break;
                 }
                 let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
-                set_caustic_light(&mut nodes, &inputs, caustic_light.as_ref());
+                set_caustic_light(&mut nodes, &inputs, root, caustic_light.as_ref());
                 sweep_pass(&mut nodes, &links, &current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
                 scales = Some(current);
             }
@@ -586,7 +589,7 @@ pub fn solve_logged(
                 links = Links::from_records(nodes.len(), records);
                 stats.add_refinement(pass, &outcome, error_after_w);
                 let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
-                set_caustic_light(&mut nodes, &inputs, caustic_light.as_ref());
+                set_caustic_light(&mut nodes, &inputs, root, caustic_light.as_ref());
                 sweep_pass(&mut nodes, &links, &current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
                 scales = Some(current);
             }
@@ -599,7 +602,7 @@ pub fn solve_logged(
         if let Some(reflected) = trace(&nodes, &inputs, CausticSources::ReflectedLight) {
             stats.caustic_photons += reflected.len();
             stats.caustic_rays += reflected.rays;
-            set_caustic_light(&mut nodes, &inputs, Some(&first.merged(reflected)));
+            set_caustic_light(&mut nodes, &inputs, root, Some(&first.merged(reflected)));
             let pass = stats.refinement_passes;
             sweep_pass(&mut nodes, &links, current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
         }
@@ -639,9 +642,9 @@ impl HierarchyStats {
 
 /// Gives every node its caustic irradiance from `light` (`caustics`), or none: after each refinement,
 /// since the photons fall into the new leaves.
-fn set_caustic_light(nodes: &mut Nodes, inputs: &clusters::InputTriangles, light: Option<&CausticLight>) {
+fn set_caustic_light(nodes: &mut Nodes, inputs: &clusters::InputTriangles, root: usize, light: Option<&CausticLight>) {
     if let Some(light) = light {
-        let irradiance = light.node_irradiance(nodes, inputs);
+        let irradiance = light.node_irradiance(nodes, inputs, root);
         nodes.set_caustic_irradiance(irradiance);
     }
 }
