@@ -4,8 +4,10 @@
 //! `hierarchical::caustic_tracer`) over the input triangles, and each leaf takes the photons that
 //! landed in it as a source term beside its emission:
 //!
-//! B_leaf = E + ρ·(G + E_c),  E_c = Σ_{photons k in the leaf} Φ_k / A_open,
+//! B_leaf = E + ρ·(G + E_c),  E_c = Σ_k Φ_k / A_open
 //!
+//! over the photons k in the leaf (or, where they are too sparse to tell the light from even, in the
+//! node above that holds enough: `CausticLight::node_irradiance`),
 //! so that the caustic light is reflected on over the links (LS+DD* paths), as the full matrix's
 //! extended form factors to the emitters carry it. Light between diffuse surfaces by way of mirrors and
 //! glass (DS+D, which the full matrix's hemicubes follow) comes from a second set of photons once the
@@ -84,12 +86,14 @@ impl CausticLight {
     /// a node's children take their own estimates when each of them that receives holds at least
     /// `NODE_PHOTONS` photons, or when their counts say the light is not even over the node (a child
     /// holds n_c photons where an even density would give m_c = n·A_c/A, and |n_c − m_c| >
-    /// 3·√(m_c + 1), a Poisson count's 3σ, as the caustic map's kernels decide); otherwise the node is
-    /// cut there, and every receiving leaf below it takes Φ_cut / A_receiving,cut. Weak, spread light (a mirror ball's over a room, the light
-    /// reflected through glass, photons a few per input triangle of a finely tessellated wall) is then
-    /// spread over a cluster of neighbours rather than grain on single triangles, while a dense focus,
-    /// or a patch of light beside a dim corner, keeps its edge. The clusters split the two sides of two-sided surfaces first
-    /// (`clusters`), so light never crosses to a back side. Power is kept exactly: Σ over the
+    /// 3·√(m_c + 1), a Poisson count's 3σ, as the caustic map's kernels decide); otherwise the node
+    /// is cut there, and every receiving leaf below it takes Φ_cut / A_receiving,cut.
+    ///
+    /// Weak, spread light (a mirror ball's over a room, the light reflected through glass, photons a
+    /// few per input triangle of a finely tessellated wall) is then spread over a cluster of
+    /// neighbours rather than grain on single triangles, while a dense focus, or a patch of light
+    /// beside a dim corner, keeps its edge. The clusters split the two sides of two-sided surfaces
+    /// first (`clusters`), so light never crosses to a back side. Power is kept exactly: Σ over the
     /// receiving leaves of A_open·E_c = Σ Φ.
     pub fn node_irradiance(&self, nodes: &Nodes, inputs: &InputTriangles, root: usize) -> Vec<Vec3> {
         let mut flux = vec![DVec3::ZERO; nodes.len()];
