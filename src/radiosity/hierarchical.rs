@@ -232,6 +232,14 @@ pub fn caustic_tracer(
     }
 }
 
+/// What the progress line says while `caustic_tracer` traces photons from `sources`.
+fn photons_message(sources: CausticSources) -> &'static str {
+    match sources {
+        CausticSources::Emitters => "tracing photons from the emitters through mirrors and glass",
+        CausticSources::ReflectedLight => "tracing photons from reflected light through mirrors and glass",
+    }
+}
+
 /// The mesh of a loaded hierarchical solution (its leaf geometry), or `None` for a uniform one.
 pub fn mesh_of(scene: &SceneDescription, solution: &Solution, textures: Arc<SceneTextures>) -> Option<Mesh> {
     solution.leaf_geometry.as_ref().map(|g| leaf_mesh::build(scene, g, textures).mesh)
@@ -407,6 +415,9 @@ impl PassOneMethod for Hierarchical {
                         memory_bytes as f64 / (1 << 20) as f64
                     ));
                 }
+                HierarchyProgress::TracingPhotons { pass, sources } => {
+                    stage.set_message(format!("pass {pass}: {}", photons_message(sources)));
+                }
                 HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
                     let relative = if max_exitance > 0.0 { max_change / max_exitance } else { 0.0 };
                     stage.set_message(format!(
@@ -578,14 +589,20 @@ impl Hierarchical {
         let mut hooks =
             EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: Some(&shared) };
         let tracer = caustic_tracer(scene, textures.clone());
-        let solved = hierarchy::solve_logged(scene, textures, &params, None, Some(&tracer), &mut hooks, &mut |p| {
-            if let HierarchyProgress::Refining { pass, round, links, nodes } = p {
-                stage.set_message(format!(
+        let solved =
+            hierarchy::solve_logged(scene, textures, &params, None, Some(&tracer), &mut hooks, &mut |p| match p {
+                HierarchyProgress::Refining { pass, round, links, nodes } => stage.set_message(format!(
                     "shard {}/{} pass {pass} round {round}: {nodes} nodes, {links} links",
                     shard.index, shard.count
-                ));
-            }
-        });
+                )),
+                HierarchyProgress::TracingPhotons { pass, sources } => stage.set_message(format!(
+                    "shard {}/{} pass {pass}: {}",
+                    shard.index,
+                    shard.count,
+                    photons_message(sources)
+                )),
+                HierarchyProgress::Sweeping { .. } => {}
+            });
         let (solved, _) = match solved {
             Err(HierarchyError::Stopped) => {
                 let signal = cancel.signal().unwrap_or(crate::interrupt::SIGINT);

@@ -51,7 +51,7 @@ use glam::{DVec3, Vec3};
 
 use crate::accel::Accel;
 use crate::material::SceneTextures;
-use crate::scene::SceneDescription;
+use crate::scene::{Material, SceneDescription};
 use caustics::{CausticLight, CausticSources, CausticTracer};
 use contact::{split_at_contacts, ContactProbe};
 use estimates::{EstimateHooks, EstimateLog, Stopped};
@@ -270,8 +270,24 @@ pub struct HierarchyStats {
 /// Progress of a solve, for a progress bar or log lines.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum HierarchyProgress {
-    Refining { pass: u32, round: u32, links: usize, nodes: usize },
-    Sweeping { pass: u32, sweep: u32, max_change: f64, max_exitance: f64 },
+    Refining {
+        pass: u32,
+        round: u32,
+        links: usize,
+        nodes: usize,
+    },
+    /// Photons are about to be traced through mirrors and glass (`caustics`), from `sources`; only
+    /// for scenes with a specular material (the tracer returns at once for others).
+    TracingPhotons {
+        pass: u32,
+        sources: CausticSources,
+    },
+    Sweeping {
+        pass: u32,
+        sweep: u32,
+        max_change: f64,
+        max_exitance: f64,
+    },
 }
 
 /// The result: the leaf elements with their exitance, and a conforming per-vertex interpolation.
@@ -479,8 +495,13 @@ pub fn solve_logged(
         split_at_contacts(&mut nodes, &inputs.node, &probe, min_element_area, max_nodes);
         nodes.assign_texture_means(first_piece);
     }
-    let caustic_light: Option<CausticLight> =
-        caustics.and_then(|trace| trace(&nodes, &inputs, CausticSources::Emitters));
+    let has_specular = scene.materials.iter().any(Material::is_specular);
+    let caustic_light: Option<CausticLight> = caustics.and_then(|trace| {
+        if has_specular {
+            on_progress(HierarchyProgress::TracingPhotons { pass: 1, sources: CausticSources::Emitters });
+        }
+        trace(&nodes, &inputs, CausticSources::Emitters)
+    });
     let mut stats = HierarchyStats {
         input_triangles: inputs.node.len(),
         clusters: nodes.is_cluster.iter().filter(|&&c| c).count(),
@@ -599,11 +620,12 @@ pub fn solve_logged(
     // converged, photons from every surface's reflected light join the emitters', and the last links
     // are swept again (a shard, which stops unswept, leaves this to its merge).
     if let (Some(trace), Some(current), Some(first)) = (caustics, scales.as_ref(), caustic_light) {
+        let pass = stats.refinement_passes;
+        on_progress(HierarchyProgress::TracingPhotons { pass, sources: CausticSources::ReflectedLight });
         if let Some(reflected) = trace(&nodes, &inputs, CausticSources::ReflectedLight) {
             stats.caustic_photons += reflected.len();
             stats.caustic_rays += reflected.rays;
             set_caustic_light(&mut nodes, &inputs, root, Some(&first.merged(reflected)));
-            let pass = stats.refinement_passes;
             sweep_pass(&mut nodes, &links, current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
         }
     }
