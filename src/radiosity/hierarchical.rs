@@ -460,7 +460,7 @@ impl PassOneMethod for Hierarchical {
         let solve_seconds = start.elapsed().as_secs_f64();
         let h = &solved.stats;
         stage.finish(&format!(
-            "{} input triangles, {} clusters → {} elements, {} links ({} estimated{}), {} passes, {} sweeps, peak {:.1} MiB{}",
+            "{} input triangles, {} clusters → {} elements, {} links ({} estimated{}), {} passes, {} sweeps, peak {:.1} MiB{}{}",
             h.input_triangles,
             h.clusters,
             h.elements,
@@ -470,7 +470,16 @@ impl PassOneMethod for Hierarchical {
             h.refinement_passes,
             h.sweeps,
             h.peak_bytes as f64 / (1 << 20) as f64,
-            if h.budget_exceeded { " (memory budget reached: coarser links kept)" } else { "" }
+            if h.budget_exceeded { " (memory budget reached: coarser links kept)" } else { "" },
+            if h.bounded_leaves > 0 {
+                format!(
+                    "; the sweeps diverged: {} leaves' links summed to more than they reflect (row sums up to {:.2}), \
+                     scaled to their hemisphere",
+                    h.bounded_leaves, h.max_row_sum
+                )
+            } else {
+                String::new()
+            }
         ));
         let geometry = LeafGeometry {
             positions: solved.mesh.positions.clone(),

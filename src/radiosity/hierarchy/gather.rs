@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use super::form_factor::point_to_polygon;
 use super::links::{is_near, Links};
 use super::nodes::Nodes;
+use super::row_sums::{row_sums, LeafGains};
 use super::source_weights::{Cursor, SourceWeights};
 use super::visibility::sample_element;
 
@@ -226,6 +227,12 @@ pub struct ArrivalScales {
     share_factor: Vec<f32>,
     /// What each link reads from a subdivided element source (`source_weights`).
     sent: SourceWeights,
+    /// Per node: the gain on what a leaf gathers, 1 unless its row sum R breaks ρ·R < 1 (`row_sums`);
+    /// empty (every gain 1) until `bound_rows`.
+    leaf_gain: Vec<f32>,
+    /// Leaves whose gain is below 1, and the largest row sum of any leaf (0 until `bound_rows`).
+    bounded_leaves: usize,
+    max_row_sum: f64,
 }
 
 // A share's member index is a byte.
@@ -353,7 +360,37 @@ impl ArrivalScales {
         out.share_member.shrink_to_fit();
         out.share_factor.shrink_to_fit();
         out.sent = SourceWeights::reusing(nodes, links, previous.map(|p| &p.sent));
+        if previous.is_some_and(ArrivalScales::rows_bounded) {
+            out.bound_rows(nodes, links);
+        }
         out
+    }
+
+    /// Gives every leaf whose row sum R would have it reflect at least all it gathers (ρ·R ≥ 1) the
+    /// gain 1/R on its gathering (`row_sums`): called by `solve::solve_until` once the sweeps
+    /// diverge, and kept by the scales `reusing` these.
+    pub fn bound_rows(&mut self, nodes: &Nodes, links: &Links) {
+        let gains = LeafGains::new(nodes, &row_sums(nodes, links, self));
+        self.leaf_gain = gains.per_node(nodes.len());
+        self.bounded_leaves = gains.scaled.len();
+        self.max_row_sum = gains.max_row_sum;
+    }
+
+    /// Whether `bound_rows` has been called.
+    pub fn rows_bounded(&self) -> bool {
+        !self.leaf_gain.is_empty()
+    }
+
+    /// What leaf `n`'s gathered irradiance is multiplied by: after `bound_rows`, 1 / R where its
+    /// row sum R would have it reflect at least all it gathers (ρ·R ≥ 1); otherwise 1.
+    pub fn leaf_gain(&self, n: usize) -> f64 {
+        self.leaf_gain.get(n).map_or(1.0, |&g| g as f64)
+    }
+
+    /// The leaves whose gain is below 1, and the largest row sum R of any leaf; (0, 0) until
+    /// `bound_rows`.
+    pub fn row_bound(&self) -> (usize, f64) {
+        (self.bounded_leaves, self.max_row_sum)
     }
 
     /// What the links of receiver `r` send, asked link by link in order (`source_weights`).

@@ -20,6 +20,9 @@
 //!
 //! Light through mirrors and glass, which no link carries, enters as photons landing in the leaves
 //! (`caustics`), traced by the caller (`solve_logged`'s `CausticTracer`).
+//!
+//! A solve whose links overshoot some leaves' hemispheres so far that the sweeps diverge bounds those
+//! rows and starts again (`row_sums`).
 
 pub mod caustics;
 pub mod clusters;
@@ -36,6 +39,7 @@ pub mod part_file;
 pub mod positional_spread;
 pub mod procedural;
 pub mod refine;
+pub mod row_sums;
 pub mod shaft;
 pub mod shards;
 pub mod solve;
@@ -265,6 +269,12 @@ pub struct HierarchyStats {
     /// the rays traced for them (`caustics`; zero without a tracer or specular surfaces).
     pub caustic_photons: usize,
     pub caustic_rays: u64,
+    /// When the sweeps diverged and the rows were bounded (`row_sums`; 0 and 0 otherwise): the leaves
+    /// whose links sum so far beyond their hemisphere that they would reflect all they gather (row
+    /// sum R with ρ·R ≥ 1; their gathering is scaled by 1/R), and the largest row sum of any leaf,
+    /// after the last refinement pass.
+    pub bounded_leaves: usize,
+    pub max_row_sum: f64,
 }
 
 /// Progress of a solve, for a progress bar or log lines.
@@ -569,17 +579,17 @@ pub fn solve_logged(
                     scales = None;
                     break;
                 }
-                let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
+                let mut current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
                 set_caustic_light(&mut nodes, &inputs, root, caustic_light.as_ref());
-                sweep_pass(&mut nodes, &links, &current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
+                sweep_pass(&mut nodes, &links, &mut current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
                 scales = Some(current);
             }
         }
         Some(kept) => {
             stats.refinement_passes = 1;
             stats.error_after_pass_w.push(refine::total_error(&nodes, &links.to_records()));
-            let first = ArrivalScales::new(&nodes, &links);
-            sweep_pass(&mut nodes, &links, &first, root, params, 1, &mut stats, hooks.stop, on_progress)?;
+            let mut first = ArrivalScales::new(&nodes, &links);
+            sweep_pass(&mut nodes, &links, &mut first, root, params, 1, &mut stats, hooks.stop, on_progress)?;
             scales = Some(first);
             for pass in 2..=params.refinement_passes {
                 let ratio = |n: &Nodes, l: &LinkRecord, threshold: f64| {
@@ -609,9 +619,9 @@ pub fn solve_logged(
                 let error_after_w = refine::total_error(&nodes, &records);
                 links = Links::from_records(nodes.len(), records);
                 stats.add_refinement(pass, &outcome, error_after_w);
-                let current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
+                let mut current = ArrivalScales::reusing(&nodes, &links, scales.take().as_ref());
                 set_caustic_light(&mut nodes, &inputs, root, caustic_light.as_ref());
-                sweep_pass(&mut nodes, &links, &current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
+                sweep_pass(&mut nodes, &links, &mut current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
                 scales = Some(current);
             }
         }
@@ -619,7 +629,7 @@ pub fn solve_logged(
     // Light between diffuse surfaces through mirrors and glass (`caustics`): once the solve has
     // converged, photons from every surface's reflected light join the emitters', and the last links
     // are swept again (a shard, which stops unswept, leaves this to its merge).
-    if let (Some(trace), Some(current), Some(first)) = (caustics, scales.as_ref(), caustic_light) {
+    if let (Some(trace), Some(current), Some(first)) = (caustics, scales.as_mut(), caustic_light) {
         let pass = stats.refinement_passes;
         on_progress(HierarchyProgress::TracingPhotons { pass, sources: CausticSources::ReflectedLight });
         if let Some(reflected) = trace(&nodes, &inputs, CausticSources::ReflectedLight) {
@@ -677,7 +687,7 @@ fn set_caustic_light(nodes: &mut Nodes, inputs: &clusters::InputTriangles, root:
 fn sweep_pass(
     nodes: &mut Nodes,
     links: &Links,
-    scales: &ArrivalScales,
+    scales: &mut ArrivalScales,
     root: usize,
     params: &HierarchyParams,
     pass: u32,
@@ -694,6 +704,7 @@ fn sweep_pass(
             .ok_or(Stopped)?;
     stats.sweeps += sweeps;
     stats.converged = converged;
+    (stats.bounded_leaves, stats.max_row_sum) = scales.row_bound();
     Ok(())
 }
 

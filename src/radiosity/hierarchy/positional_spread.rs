@@ -19,7 +19,8 @@
 //! cluster of at most `NEAR_CLUSTER_MEMBERS` members the sum of the exact form factors to its
 //! members, each times the member's exitance (a larger near cluster stays uniform). Σ_ℓ A_ℓ·T·g(ℓ)/ḡ
 //! = A_R·T: the power is kept exactly, only moved between the leaves; the leaf's exitance changes by
-//! ρ_ℓ·Σ T·(g(ℓ)/ḡ − 1) (clamped at 0). Visibility stays the link's (one value over R). The light
+//! ρ_ℓ·g_ℓ·Σ T·(g(ℓ)/ḡ − 1) (clamped at 0; g_ℓ the leaf's gain where ρ·R ≥ 1, as in the sweep:
+//! `row_sums`). Visibility stays the link's (one value over R). The light
 //! spread this way: R's own links (T = F·B_S, as the gather reads it); the far arrivals its clusters
 //! pass it (`gather::Arrival`, evaluated at R's centre by the push, T = w·g(R)); and their member
 //! shares (`ArrivalScales` shares, T = F·B_S·c_R).
@@ -154,7 +155,10 @@ pub fn spread_leaf_exitance(nodes: &Nodes, links: &Links, scales: &ArrivalScales
     let Moves { delta, touched } = moves;
     (0..nodes.len())
         .filter(|&n| touched[n])
-        .map(|n| (n, (nodes.exitance[n] + nodes.reflectance[n].as_dvec3() * delta[n]).max(DVec3::ZERO)))
+        .map(|n| {
+            let moved = delta[n] * scales.leaf_gain(n);
+            (n, (nodes.exitance[n] + nodes.reflectance[n].as_dvec3() * moved).max(DVec3::ZERO))
+        })
         .collect()
 }
 

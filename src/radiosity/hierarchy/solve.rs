@@ -19,7 +19,9 @@ pub struct SweepChange {
 /// One in-place sweep over the tree below `root` with relaxation factor ω:
 ///
 /// G_n = G_parent + Σ_{S linked to n} F_nS B_S (a cluster's links as arrivals that each element below
-/// takes by its own cosine, see `gather::Irradiance`);  leaves: B ← B + ω(S + ρG − B), S = E + ρ·E_c
+/// takes by its own cosine, see `gather::Irradiance`);  leaves: B ← B + ω(S + ρ·g·G − B), g the leaf's
+/// gain (1, or 1/R where its row sum R has ρ·R ≥ 1 once the rows are bounded: `row_sums`,
+/// `ArrivalScales::leaf_gain`), S = E + ρ·E_c
 /// the emission and reflected caustic light (`Nodes::source_exitance`);
 /// inner nodes: B = Σ_c A_c B_c / Σ_c A_c (after their children).
 ///
@@ -51,8 +53,9 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, scales: &ArrivalScales, root: usi
         let g = push_step(nodes, n, down, own_uniform, std::mem::take(&mut pending[n]), &arrivals);
         if nodes.is_leaf(n) {
             let old = nodes.exitance[n];
+            let gathered = g.uniform * scales.leaf_gain(n);
             let new =
-                leaf_exitance(nodes.source_exitance(n), nodes.reflectance[n].as_dvec3(), g.uniform, old, relaxation);
+                leaf_exitance(nodes.source_exitance(n), nodes.reflectance[n].as_dvec3(), gathered, old, relaxation);
             nodes.exitance[n] = new;
             nodes.exitance_mean[n] = mean_channel(new);
             change.max_change = change.max_change.max((new - old).abs().max_element());
@@ -78,19 +81,23 @@ pub fn solve(
     max_sweeps: u32,
     on_sweep: &mut dyn FnMut(u32, SweepChange),
 ) -> (u32, bool) {
-    let scales = ArrivalScales::new(nodes, links);
-    solve_until(nodes, links, &scales, root, relaxation, tolerance, max_sweeps, on_sweep, &|| false)
+    let mut scales = ArrivalScales::new(nodes, links);
+    solve_until(nodes, links, &mut scales, root, relaxation, tolerance, max_sweeps, on_sweep, &|| false)
         .expect("never stopped")
 }
 
 /// `solve` over the links' `scales` (`ArrivalScales`, which the caller keeps from one refinement
 /// pass to the next) that looks at `stop` before each sweep: `None` when it asked (the exitance is
 /// then that of the last finished sweep).
+///
+/// A solve whose largest leaf exitance passes `exitance_limit` is diverging (some leaves' links
+/// overshoot their hemisphere so far that ρ·R ≥ 1): its rows are then bounded
+/// (`ArrivalScales::bound_rows`, `row_sums`) and the sweeps start again from the emission.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_until(
     nodes: &mut Nodes,
     links: &Links,
-    scales: &ArrivalScales,
+    scales: &mut ArrivalScales,
     root: usize,
     relaxation: f64,
     tolerance: f64,
@@ -98,17 +105,41 @@ pub fn solve_until(
     on_sweep: &mut dyn FnMut(u32, SweepChange),
     stop: &dyn Fn() -> bool,
 ) -> Option<(u32, bool)> {
+    let limit = exitance_limit(nodes, root);
     for k in 1..=max_sweeps {
         if stop() {
             return None;
         }
         let c = sweep(nodes, links, scales, root, relaxation);
         on_sweep(k, c);
+        if c.max_exitance > limit && !scales.rows_bounded() {
+            scales.bound_rows(nodes, links);
+            reset_to_emission(nodes, root);
+            continue;
+        }
         if c.max_change <= tolerance * c.max_exitance {
             return Some((k, true));
         }
     }
     Some((max_sweeps, false))
+}
+
+/// Twice the largest exitance a leaf below `root` can reach while every row keeps its hemisphere
+/// (R ≤ 1): B ≤ S_max / (1 − ρ_max), S the leaves' emission and reflected caustic light
+/// (`Nodes::source_exitance`) and ρ_max the largest reflectance channel (at most 0.99 here). Above
+/// it the sweeps are diverging, not converging slowly.
+pub fn exitance_limit(nodes: &Nodes, root: usize) -> f64 {
+    let (mut source, mut reflectance) = (0.0f64, 0.0f64);
+    let mut stack = vec![root];
+    while let Some(n) = stack.pop() {
+        if nodes.is_leaf(n) {
+            source = source.max(nodes.source_exitance(n).max_element());
+            reflectance = reflectance.max(nodes.reflectance[n].max_element() as f64);
+        } else {
+            stack.extend(nodes.children(n));
+        }
+    }
+    2.0 * source / (1.0 - reflectance.min(0.99))
 }
 
 /// Sets every leaf to its emission and reflected caustic light and pulls the means up: the exitance
