@@ -27,6 +27,12 @@
 //!   none where they cannot exchange light, is right): the unoccluded pair transfer of the pairs with
 //!   none (and their visible part by source object) and with two or more.
 //!
+//! - `--row-sums [RAYS]`: per object and sheet (front, back of a two-sided surface), the leaves'
+//!   row sums R (`row_sums`: what their own and their ancestors' links bring with every node at
+//!   exitance 1, the share of the hemisphere the links see) against the share cosine rays see
+//!   (RAYS per leaf, default 16: the fraction that meets a surface facing them), area-weighted;
+//!   largest |R − rays| × area first. Inside a closed room both are 1.
+//!
 //! - `--unlinked NAME`: cosine rays from every leaf of NAME (both sheets) to the leaf they hit, and
 //!   whether any link joins an ancestor-or-self of the one to an ancestor-or-self of the other: the
 //!   exitance those rays read, linked and not, by the hit leaf's object; `UNLINKED_DETAIL=K` prints
@@ -36,6 +42,7 @@
 //!        hierarchy_links SCENE.toml --object|--gathered NAME [NAME...]
 //!        hierarchy_links SCENE.toml --link-bias [EVERY] [RECEIVER_OBJECT SOURCE_OBJECT]
 //!        hierarchy_links SCENE.toml --sent|--coverage|--unlinked NAME
+//!        hierarchy_links SCENE.toml --row-sums [RAYS]
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
@@ -68,6 +75,9 @@ fn main() -> ExitCode {
     }
     if args[2] == "--unlinked" {
         return unlinked(&scene, &args[3]);
+    }
+    if args[2] == "--row-sums" {
+        return row_sums_by_object(&scene, args.get(3).and_then(|a| a.parse().ok()).unwrap_or(16));
     }
     if args[2] == "--coverage" {
         return coverage(&scene, &args[3]);
@@ -999,6 +1009,72 @@ fn radiosity_leaves(nodes: &radray::radiosity::hierarchy::nodes::Nodes, node: us
 }
 
 /// The `--unlinked` report.
+fn row_sums_by_object(scene: &radray::scene::SceneDescription, rays: usize) -> ExitCode {
+    use rayon::prelude::*;
+    let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
+    let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
+    let scales = ArrivalScales::new(nodes, links);
+    let sums = radray::radiosity::hierarchy::row_sums::row_sums(nodes, links, &scales);
+    let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
+    let tracer = LeafTracer::new(nodes, inputs, &leaves);
+    let offset = scene.diagonal() * 1e-5;
+    let receiving: Vec<usize> = leaves
+        .iter()
+        .copied()
+        .filter(|&n| nodes.open_area[n] > 0.0 && nodes.reflectance[n].max_element() > 0.0)
+        .collect();
+    let seen: Vec<f64> = receiving
+        .par_iter()
+        .map(|&e| {
+            let mut state = radray::rng::splitmix64(e as u64 ^ 0x0005_0335);
+            let mut uniform = || {
+                state = radray::rng::splitmix64(state);
+                (state >> 40) as f32 / (1u64 << 24) as f32
+            };
+            let facing = (0..rays)
+                .filter(|_| matches!(tracer.cosine_ray(nodes, e, offset, &mut uniform), RayEnd::Facing(_)))
+                .count();
+            facing as f64 / rays as f64
+        })
+        .collect();
+    // Per (object, sheet): [area, Σ A·R, Σ A·rays, Σ A·|R − rays|, leaves].
+    let mut rows: std::collections::BTreeMap<(String, bool), [f64; 5]> = Default::default();
+    let mut all = [0.0f64; 5];
+    for (&e, &h) in receiving.iter().zip(&seen) {
+        let input = nodes.input[e] as usize;
+        let key = (scene.surfaces[inputs.surface[input] as usize].object.clone(), inputs.back[input]);
+        let a = nodes.open_area[e] as f64;
+        let add = [a, a * sums[e], a * h, a * (sums[e] - h).abs(), 1.0];
+        let row = rows.entry(key).or_insert([0.0; 5]);
+        for i in 0..5 {
+            row[i] += add[i];
+            all[i] += add[i];
+        }
+    }
+    let mut rows: Vec<_> = rows.into_iter().collect();
+    rows.sort_by(|a, b| b.1[3].total_cmp(&a.1[3]));
+    println!("{rays} cosine rays per leaf; R = the links' row sum, rays = the share meeting a facing surface");
+    println!(
+        "{:<28} {:>5} {:>9} {:>12} {:>7} {:>7} {:>9}",
+        "object", "sheet", "leaves", "area", "R", "rays", "|R-rays|"
+    );
+    let line = |name: &str, sheet: &str, r: &[f64; 5]| {
+        println!(
+            "{name:<28} {sheet:>5} {:>9} {:>12.1} {:>7.3} {:>7.3} {:>9.3}",
+            r[4] as usize,
+            r[0],
+            r[1] / r[0],
+            r[2] / r[0],
+            r[3] / r[0]
+        )
+    };
+    line("all", "both", &all);
+    for ((name, back), r) in rows.iter().take(40) {
+        line(name, if *back { "back" } else { "front" }, r);
+    }
+    ExitCode::SUCCESS
+}
+
 fn unlinked(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
     use rayon::prelude::*;
     let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
