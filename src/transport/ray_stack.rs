@@ -11,8 +11,12 @@ use super::scatter::{carries, Scatter};
 pub struct StackRay {
     pub origin: Vec3,
     pub dir: Vec3,
-    /// Product of the specular weights along the path so far.
+    /// Product of the specular weights along the path so far, the refractions' radiance factors
+    /// (η_i/η_t)² included (`scatter`).
     pub throughput: Vec3,
+    /// The product of those radiance factors alone: 1 in the medium the path started in, 1/n² inside
+    /// a dielectric of index n entered from air.
+    pub radiance_scale: f32,
     /// Bounces before this ray (0 for the root).
     pub depth: u32,
 }
@@ -28,7 +32,7 @@ impl<const N: usize> RayStack<N> {
     /// A stack holding the root ray `origin + t·dir` (normalised) with throughput 1.
     pub fn new(origin: Vec3, dir: Vec3) -> RayStack<N> {
         let mut rays = [StackRay::default(); N];
-        rays[0] = StackRay { origin, dir: dir.normalize(), throughput: Vec3::ONE, depth: 0 };
+        rays[0] = StackRay { origin, dir: dir.normalize(), throughput: Vec3::ONE, radiance_scale: 1.0, depth: 0 };
         RayStack { rays, len: 1 }
     }
 
@@ -38,7 +42,9 @@ impl<const N: usize> RayStack<N> {
     }
 
     /// Pushes the branches of `scatter` (`Scatter::split` of `ray`'s throughput) one level deeper,
-    /// leaving `hit` by `offset`, those that still carry light (`carries` with `min_throughput`).
+    /// leaving `hit` by `offset`, those that still carry light (`carries` with `min_throughput`, on
+    /// the throughput without the radiance factors: a path inside glass is cut where it would be cut
+    /// outside, since leaving undoes the factor of entering).
     pub fn push_branches(
         &mut self,
         ray: &StackRay,
@@ -48,12 +54,14 @@ impl<const N: usize> RayStack<N> {
         min_throughput: f32,
     ) {
         for branch in scatter.split(ray.throughput).into_iter().flatten() {
-            if carries(branch.throughput, min_throughput) {
+            let radiance_scale = ray.radiance_scale * branch.radiance_scale;
+            if carries(branch.throughput / radiance_scale, min_throughput) {
                 assert!(self.len < N, "ray stack overflow: the depth bound sizes the stack so this cannot happen");
                 self.rays[self.len] = StackRay {
                     origin: branch.origin(hit, offset),
                     dir: branch.dir,
                     throughput: branch.throughput,
+                    radiance_scale,
                     depth: ray.depth + 1,
                 };
                 self.len += 1;

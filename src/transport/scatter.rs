@@ -2,6 +2,14 @@
 //! reflects with its Ks; a dielectric reflects with Ks·R and refracts with (1 − R)·(1 − d)·Tf on the
 //! way in, (1 − R)·(1 − d) on the way out, R the unpolarised Fresnel reflectance and Tf the
 //! transmission filter colour; and the one throughput cutoff that ends a branch.
+//!
+//! Radiance changes across a refracting interface: L/η² is what a path conserves (Veach 1997,
+//! §5.2), so light passing from a medium of index η_t into one of index η_i arrives with radiance
+//! ×(η_i/η_t)². A ray traced from the eye or a gathering point (`Scatter::split`) meets that light
+//! going the other way: its refracted branch takes the factor (η_i/η_t)², η_i the index on the side
+//! the ray comes from. Through a closed solid the two crossings cancel; a diffuse surface inside a
+//! dielectric (a pool's floor under its water) is seen 1/η² as bright as in air. Photons
+//! (`Scatter::choose`) carry flux, which needs no factor.
 
 use glam::Vec3;
 
@@ -28,6 +36,9 @@ pub enum Scatter {
         reflectance: Vec3,
         /// T per channel: (1 − d)·Tf when the ray enters the front side, 1 − d when it leaves.
         transmittance: Vec3,
+        /// (η_i/η_t)²: what radiance traced backwards through the interface is multiplied by (see the
+        /// module); 1/Ni² entering, Ni² leaving.
+        radiance_scale: f32,
     },
 }
 
@@ -39,6 +50,9 @@ pub struct Branch {
     pub transmitted: bool,
     /// The path's throughput after the surface.
     pub throughput: Vec3,
+    /// The refraction's radiance factor (η_i/η_t)² in `throughput` (1 for a reflection), which the
+    /// throughput cutoff leaves out (`ray_stack`).
+    pub radiance_scale: f32,
 }
 
 impl Branch {
@@ -71,6 +85,7 @@ pub fn scatter(material: &Material, dir: Vec3, hit: &SurfaceHit) -> Scatter {
             fresnel,
             reflectance: material.specular_reflectance,
             transmittance: material.transmittance * if hit.front { material.transmission_filter } else { Vec3::ONE },
+            radiance_scale: (eta_i / eta_t) * (eta_i / eta_t),
         }
     } else if material.specular_reflectance.max_element() > 0.0 {
         Scatter::Mirror { dir: mirror(dir, shading, facing), reflectance: material.specular_reflectance }
@@ -80,21 +95,29 @@ pub fn scatter(material: &Material, dir: Vec3, hit: &SurfaceHit) -> Scatter {
 }
 
 impl Scatter {
-    /// Both branches of a path with throughput T (Whitted's tree): mirror T·Ks; dielectric reflected
-    /// T·Ks·R and, when R < 1, refracted T·(1 − R)·T_d (`Scatter::Dielectric::transmittance`). The
-    /// reflected branch comes first.
+    /// Both branches of a path with throughput T traced backwards, from the eye or a gathering point
+    /// (Whitted's tree): mirror T·Ks; dielectric reflected T·Ks·R and, when R < 1, refracted
+    /// T·(1 − R)·T_d·(η_i/η_t)² (`Scatter::Dielectric::transmittance`, `radiance_scale`: see the
+    /// module). The reflected branch comes first.
     pub fn split(&self, throughput: Vec3) -> [Option<Branch>; 2] {
         match *self {
             Scatter::None => [None, None],
-            Scatter::Mirror { dir, reflectance } => {
-                [Some(Branch { dir, transmitted: false, throughput: throughput * reflectance }), None]
-            }
-            Scatter::Dielectric { reflected, refracted, fresnel, reflectance, transmittance } => [
-                Some(Branch { dir: reflected, transmitted: false, throughput: throughput * reflectance * fresnel }),
+            Scatter::Mirror { dir, reflectance } => [
+                Some(Branch { dir, transmitted: false, throughput: throughput * reflectance, radiance_scale: 1.0 }),
+                None,
+            ],
+            Scatter::Dielectric { reflected, refracted, fresnel, reflectance, transmittance, radiance_scale } => [
+                Some(Branch {
+                    dir: reflected,
+                    transmitted: false,
+                    throughput: throughput * reflectance * fresnel,
+                    radiance_scale: 1.0,
+                }),
                 refracted.filter(|_| fresnel < 1.0).map(|dir| Branch {
                     dir,
                     transmitted: true,
-                    throughput: throughput * ((1.0 - fresnel) * transmittance),
+                    throughput: throughput * ((1.0 - fresnel) * radiance_scale * transmittance),
+                    radiance_scale,
                 }),
             ],
         }
@@ -108,7 +131,7 @@ impl Scatter {
         match *self {
             Scatter::None => None,
             Scatter::Mirror { dir, reflectance } => Some((dir, false, reflectance)),
-            Scatter::Dielectric { reflected, refracted, fresnel, reflectance, transmittance } => match refracted {
+            Scatter::Dielectric { reflected, refracted, fresnel, reflectance, transmittance, .. } => match refracted {
                 Some(dir) if u() >= fresnel => Some((dir, true, transmittance)),
                 Some(_) => Some((reflected, false, reflectance)),
                 None => Some((reflected, false, reflectance * fresnel)),
@@ -133,5 +156,56 @@ pub fn mirror(d: Vec3, shading: Vec3, facing: Vec3) -> Vec3 {
         r
     } else {
         reflect(d, facing)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hit by a ray going down (−y): the normals face the ray; `front` says which side it is.
+    fn hit(front: bool) -> SurfaceHit {
+        let n = Vec3::Y;
+        SurfaceHit {
+            position: Vec3::ZERO,
+            geometric_normal: n,
+            shading_normal: n,
+            smooth_normal: n,
+            triangle: 0,
+            front,
+            front_element: 0,
+            element: Some(0),
+            surface: 0,
+            vertices: [0, 1, 2],
+            bary: [1.0 / 3.0; 3],
+            uv: glam::Vec2::ZERO,
+            material: 0,
+        }
+    }
+
+    /// Straight through a clear glass (n = 1.5) interface: entering, the refracted branch of a ray
+    /// traced backwards carries (1 − R)/n² (radiance grows by n² towards the denser side, so what the
+    /// ray reads there counts 1/n²); leaving, (1 − R)·n². Through a closed solid they cancel, leaving
+    /// the two interfaces' (1 − R)².
+    #[test]
+    fn refraction_scales_backward_radiance_by_the_squared_index_ratio() {
+        let glass = Material {
+            ior: 1.5,
+            transmittance: 1.0,
+            specular_reflectance: Vec3::ONE,
+            ..Material::diffuse("glass", Vec3::ZERO)
+        };
+        assert!(glass.is_dielectric());
+        let r = fresnel_dielectric(1.0, 1.0, 1.5);
+        let into = scatter(&glass, Vec3::NEG_Y, &hit(true)).split(Vec3::ONE)[1].expect("refracts");
+        let out = scatter(&glass, Vec3::NEG_Y, &hit(false)).split(Vec3::ONE)[1].expect("refracts");
+        assert!((into.throughput.x - (1.0 - r) / 2.25).abs() < 1e-6, "{}", into.throughput);
+        assert!((out.throughput.x - (1.0 - r) * 2.25).abs() < 1e-6, "{}", out.throughput);
+        assert!((into.radiance_scale - 1.0 / 2.25).abs() < 1e-7 && out.radiance_scale == 2.25);
+        assert!((into.throughput.x * out.throughput.x - (1.0 - r) * (1.0 - r)).abs() < 1e-6);
+        // Photons carry flux: no factor.
+        let (_, transmitted, factor) = scatter(&glass, Vec3::NEG_Y, &hit(true)).choose(|| 0.5).unwrap();
+        assert!(transmitted);
+        assert_eq!(factor, Vec3::ONE);
     }
 }
