@@ -21,7 +21,8 @@ const RAYS_SIDE: usize = 4;
 pub const BURIED_SHARE: f32 = 0.5;
 
 /// The share of element i's cosine-weighted hemisphere, seen from `point` on it lifted by 10⁻³ of its
-/// size along the normal (where its hemicube's eye sits), that ends on the back of a one-sided surface:
+/// size along the normal (where its hemicube's eye sits), that ends on the back of a one-sided opaque
+/// surface (a one-sided dielectric's back lets light through, `Mesh::back_refracts`):
 /// the fraction of 16 stratified cosine-distributed rays (u₁, u₂) ∈ {(a + ½)/4, (b + ½)/4} with
 /// direction (√u₁ cos 2πu₂, √u₁ sin 2πu₂, √(1 − u₁)) in the element's frame. Deterministic.
 pub fn hidden_share_at(mesh: &Mesh, accel: &Accel, i: usize, point: Vec3) -> f32 {
@@ -38,8 +39,9 @@ pub fn hidden_share_at(mesh: &Mesh, accel: &Accel, i: usize, point: Vec3) -> f32
             let dir = (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).sqrt()).normalize();
             if let Some(hit) = accel.closest_hit(origin, dir, 0.0, f32::INFINITY) {
                 let tri = hit.triangle as usize;
-                let front = e.normal[mesh.triangle_element[tri] as usize];
-                if dir.dot(front) > 0.0 && mesh.triangle_back_element[tri] == NONE {
+                let element = mesh.triangle_element[tri] as usize;
+                let front = e.normal[element];
+                if dir.dot(front) > 0.0 && mesh.triangle_back_element[tri] == NONE && !mesh.back_refracts(element) {
                     hidden += 1;
                 }
             }

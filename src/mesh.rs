@@ -100,6 +100,10 @@ pub struct Mesh {
     pub surface_source: Vec<u32>,
     /// For each mesh surface: its scene surface has texture coordinates.
     pub surface_has_uv: Vec<bool>,
+    /// For each mesh surface: one-sided and dielectric (a water surface, an open glass sheet), so a
+    /// ray that meets its back is refracted out of the medium instead of stopped (`back_refracts`);
+    /// empty when the scene has none.
+    pub surface_back_refracts: Vec<bool>,
     /// The scene's loaded texture maps (empty for an untextured scene), shared with pass two.
     pub textures: Arc<SceneTextures>,
     /// Per element, its mean opacity ᾱₑ (`mean_element_coverage`) when the scene has cut-outs
@@ -261,6 +265,7 @@ impl Mesh {
             + bytes(&self.triangle_back_vertices)
             + bytes(&self.surface_source)
             + bytes(&self.surface_has_uv)
+            + bytes(&self.surface_back_refracts)
             + bytes(&self.element_coverage)
             + bytes(&self.element_buried)
             + bytes(&self.element_eye)
@@ -314,6 +319,7 @@ impl Mesh {
             mesh.interpolate_uvs(first_vertex, surface);
             mesh.surface_source.push(s as u32);
             mesh.surface_has_uv.push(surface.uvs.is_some());
+            mesh.surface_back_refracts.push(!surface.two_sided && material.is_dielectric());
             if surface.two_sided {
                 back_sides.push((s, first_element..mesh.elements.len(), first_triangle..mesh.triangles.len()));
             }
@@ -325,7 +331,11 @@ impl Mesh {
             let mesh_surface = mesh.surface_source.len() as u32;
             mesh.surface_source.push(s as u32);
             mesh.surface_has_uv.push(surface.uvs.is_some());
+            mesh.surface_back_refracts.push(false);
             mesh.add_back_side(front, front_triangles, mesh_surface, surface.material, material);
+        }
+        if !mesh.surface_back_refracts.contains(&true) {
+            mesh.surface_back_refracts = Vec::new();
         }
         mesh
     }
@@ -488,6 +498,12 @@ impl Mesh {
             self.triangle_back_element.push(NONE);
             self.triangle_back_vertices.push([NONE; 3]);
         }
+    }
+
+    /// Element e is on a one-sided dielectric surface (`surface_back_refracts`): what lies behind it is
+    /// seen through its back, refracted, rather than hidden by it.
+    pub fn back_refracts(&self, e: usize) -> bool {
+        self.surface_back_refracts.get(self.elements.surface[e] as usize).copied().unwrap_or(false)
     }
 
     /// Pass one's treatment of cut-outs: an element whose mean opacity ᾱₑ is below ½ is not drawn in

@@ -166,6 +166,41 @@ fn glass_slab_passes_its_fresnel_transmittance() {
     );
 }
 
+/// A 0.1 m patch on the floor facing up, 2 mm under an open glass sheet (one-sided, n = 1.5, its front
+/// facing up: a water surface seen from below), and a 2 m × 2 m emitter 2 m above facing down. The
+/// patch's hemicube sees the sheet's back; a ray through it leaves the medium, refracted, with
+/// throughput (1 − R)·n² (the radiance outside read from inside the medium: L/n² is conserved), and
+/// the cone it reaches outside is n² times wider in projected solid angle than the cone inside, so
+/// Fˢ = (1 − R(θ))·F with F the open form factor and θ the angle in air, between 1 − R(θ_max) ≈ 0.958
+/// and 1 − R(0) = 0.96. The back of a one-sided opaque surface would give 0 (it absorbs), as did a
+/// dielectric one before session 25, which also counted the patch as buried. Tolerance as for the
+/// slab.
+#[test]
+fn open_glass_sheet_passes_the_light_above_to_a_patch_beneath() {
+    let emitter = horizontal(2.0, (-1.0, 1.0), (-1.0, 1.0), false);
+    let patch = horizontal(0.0, (-0.05, 0.05), (-0.05, 0.05), true);
+    let sheet = horizontal(0.002, (-6.0, 6.0), (-6.0, 6.0), true);
+    let s = scene(vec![(patch, DIFFUSE), (emitter.clone(), EMITTER), (sheet, GLASS)]);
+    let mesh = Mesh::build(&s, f32::INFINITY);
+    assert!(mesh.back_refracts(2) && !mesh.back_refracts(0));
+    let accel = Accel::build(&mesh.positions, &mesh.triangles);
+    assert_eq!(radray::burial::hidden_share(&mesh, &accel)[0], 0.0, "the patch is not buried under the sheet");
+    let n = 256u32;
+    let ff = extended(&s, &mesh, n);
+    assert_eq!(sum_of(ff.row_plain(0), 1), 0.0, "the sheet hides the emitter from straight view");
+    assert_eq!(sum_of(ff.row_plain(0), 2), 0.0, "the sheet's back has no plain entry");
+    let open = lambert(eye(&mesh, 0), Vec3::Y, &emitter);
+    let theta_max = (1.0f32.hypot(1.0) / 2.0).atan();
+    let transmitted = |theta: f32| 1.0 - fresnel_dielectric(theta.cos(), 1.0, 1.5) as f64;
+    let tolerance = 0.5 / specular_resolution(n) + 2e-4;
+    let got = sum_of(ff.row_extended(0), 1);
+    let (lo, hi) = (transmitted(theta_max) * open, transmitted(0.0) * open);
+    assert!(
+        got >= lo - tolerance && got <= hi + tolerance,
+        "Fˢ = {got}, expected (1 − R)·F in [{lo}, {hi}] ± {tolerance} (open F = {open})"
+    );
+}
+
 /// The unit cube, inward-facing, with an emitting ceiling; `mirror_floor` makes the floor a mirror.
 fn box_scene(mirror_floor: bool) -> SceneDescription {
     let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);

@@ -109,6 +109,12 @@ pub fn build(scene: &SceneDescription, geometry: &LeafGeometry, textures: Arc<Sc
     }
     mesh.surface_source = (0..surfaces).chain(0..surfaces).collect();
     mesh.surface_has_uv = scene.surfaces.iter().chain(&scene.surfaces).map(|s| s.uvs.is_some()).collect();
+    let back_refracts =
+        |s: &crate::scene::Surface| !s.two_sided && scene.materials[s.material as usize].is_dielectric();
+    if scene.surfaces.iter().any(back_refracts) {
+        mesh.surface_back_refracts =
+            scene.surfaces.iter().map(back_refracts).chain(scene.surfaces.iter().map(|_| false)).collect();
+    }
     // Back leaves by scene surface, for point location on two-sided surfaces.
     let mut back_leaves: FxHashMap<u32, Vec<u32>> = FxHashMap::default();
     for leaf in 0..geometry.triangles.len() {

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::hemicube::{Hemicube, ItemBuffer};
+use super::hemicube::{BackItems, Hemicube, ItemBuffer};
 use crate::accel::Accel;
 use crate::mesh::Mesh;
 use crate::rng::Pcg32;
@@ -242,9 +242,11 @@ impl<'a> SpecularPaths<'a> {
         let mut chosen = vec![0usize; block_count];
         let mut rng = Pcg32::new(seed, element as u64);
         let mut stats = SpecularStats::default();
+        let backs = BackItems::past(self.mesh.elements.len());
         buffers.for_each_covered_pixel(hc, |pixel, item, delta| {
-            // Items past the elements are the backs of one-sided surfaces (`element_row`'s occluder).
-            if !self.specular.get(item as usize).copied().unwrap_or(false) {
+            // Past the elements: the backs of one-sided surfaces; only a dielectric's lets light through.
+            let specular = self.specular.get(item as usize).copied().unwrap_or(item == backs.refracting);
+            if !specular {
                 return;
             }
             stats.pixels += 1;
@@ -263,7 +265,8 @@ impl<'a> SpecularPaths<'a> {
             }
             let pixel = chosen[b];
             let dir = buffers.pixel_direction(hc, pixel);
-            let first_hit_counts = buffers.item_at(pixel).is_some_and(|item| self.pure_specular[item as usize]);
+            let first_hit_counts =
+                buffers.item_at(pixel).is_some_and(|item| self.pure_specular.get(item as usize) == Some(&true));
             let w = weight[b];
             stats.rays += self.follow(eye, dir, first_hit_counts, |j, throughput| {
                 // With light paths, LS+D light comes from the photons (`with_light_paths`).

@@ -10,6 +10,29 @@ use super::clip::{
 use super::raster::rasterise_convex;
 use super::Hemicube;
 
+/// The items a hemicube of an element row (`ElementHierarchy::element_row`) draws for the backs of
+/// one-sided surfaces, numbered just past the mesh's elements so that they never name one. Both hide
+/// what lies behind them and get no form factor; the pixels of a `refracting` back (a one-sided
+/// dielectric: water, an open glass sheet) are followed through it as a specular element's are
+/// (`specular::SpecularPaths::extend_row`), while an `opaque` back absorbs, as pass two sees it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BackItems {
+    pub opaque: u32,
+    pub refracting: u32,
+}
+
+impl BackItems {
+    /// The back items of a mesh of `element_count` elements.
+    pub fn past(element_count: usize) -> BackItems {
+        BackItems { opaque: element_count as u32, refracting: element_count as u32 + 1 }
+    }
+
+    /// `item` is one of the two.
+    pub fn contains(&self, item: u32) -> bool {
+        item == self.opaque || item == self.refracting
+    }
+}
+
 /// Per-thread working memory of the rasteriser: the item buffer (item id and inverse depth 1/w per
 /// pixel of the five faces) and a dense accumulator of form factors per item. Items are below
 /// `mesh::NONE` (u32::MAX).

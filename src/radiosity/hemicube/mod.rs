@@ -16,6 +16,6 @@ mod raster;
 mod tables;
 
 pub use clip::HemicubeFrame;
-pub use item_buffer::ItemBuffer;
+pub use item_buffer::{BackItems, ItemBuffer};
 pub use point::{newell_plane, point_form_factors};
 pub use tables::Hemicube;

@@ -9,7 +9,7 @@ use std::sync::Mutex;
 
 use super::PartialRows;
 use crate::mesh::Mesh;
-use crate::radiosity::hemicube::{Hemicube, HemicubeFrame, ItemBuffer};
+use crate::radiosity::hemicube::{BackItems, Hemicube, HemicubeFrame, ItemBuffer};
 use crate::radiosity::specular::{SpecularPaths, SpecularStats};
 use crate::scene::RadiosityParams;
 
@@ -237,7 +237,8 @@ impl ElementHierarchy {
     /// Row i of F: a hemicube at element i's centre (lifted by a thousandth of the element's size along
     /// its normal), aligned with the normal and rotated by `hemicube_rotation_rad`, seeing every other
     /// element (Cohen and Greenberg 1985). One-sided elements seen from behind are drawn as occluders
-    /// (opaque, no form factor), as pass two sees them; back-facing sides of two-sided surfaces,
+    /// (no form factor: `BackItems`), opaque as pass two sees them, or refracting for a one-sided
+    /// dielectric (`Mesh::back_refracts`), whose pixels extended form factors follow; back-facing sides of two-sided surfaces,
     /// chunks outside all five face frusta and mostly cut-out elements (`Mesh::hidden_from_hemicubes`)
     /// are skipped. Appends (j, F_ij) with increasing j to `row`.
     pub fn element_row(
@@ -253,7 +254,7 @@ impl ElementHierarchy {
         let normal = e.normal[i];
         let eye = mesh.eye(i) + normal * eye_offset(e.area[i]);
         buffers.begin(hc, HemicubeFrame::new(eye, normal, hemicube_rotation_rad(params, i)));
-        let occluder = e.len() as u32;
+        let backs = BackItems::past(e.len());
         for chunk in &self.chunks {
             if let Some((n, offset)) = chunk.plane {
                 if chunk.two_sided && n.dot(eye) <= offset {
@@ -272,6 +273,7 @@ impl ElementHierarchy {
                     buffers.add_indexed_polygon(hc, j as u32, &mesh.positions, corners, e.normal[j], e.centre[j]);
                 } else {
                     let (normal, centre) = (e.normal[j], e.centre[j]);
+                    let occluder = if mesh.back_refracts(j) { backs.refracting } else { backs.opaque };
                     buffers.add_indexed_polygon_or_occluder(
                         hc,
                         j as u32,
@@ -285,7 +287,7 @@ impl ElementHierarchy {
             }
         }
         buffers.finish(hc, |j, f| {
-            if j != occluder {
+            if !backs.contains(j) {
                 row.push((j, f as f32))
             }
         });
