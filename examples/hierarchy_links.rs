@@ -31,7 +31,12 @@
 //!   row sums R (`row_sums`: what their own and their ancestors' links bring with every node at
 //!   exitance 1, the share of the hemisphere the links see) against the share cosine rays see
 //!   (RAYS per leaf, default 16: the fraction that meets a surface facing them), area-weighted;
-//!   largest |R − rays| × area first. Inside a closed room both are 1.
+//!   largest |R − rays| × area first. Inside a closed room both are 1. R is also split by link
+//!   kind (element pairs, far cluster links, near self-links, other near links), and per kind the
+//!   links' Σ A_R·F (what they claim at unit exitance) against Σ A_open·R over the leaves (what the
+//!   push delivers). With `ROW_SUMS_REESTIMATE=SEED` every link is estimated again with rays of
+//!   another seed (no cap, no threshold) and the same sums are printed: an estimate independent of
+//!   the one refinement kept or split the link by.
 //!
 //! - `--unlinked NAME`: cosine rays from every leaf of NAME (both sheets) to the leaf they hit, and
 //!   whether any link joins an ancestor-or-self of the one to an ancestor-or-self of the other: the
@@ -281,15 +286,7 @@ fn object_breakdown(scene: &radray::scene::SceneDescription, objects: &[String])
     let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
     let scales = ArrivalScales::new(nodes, links);
     // The scene's triangles for visibility rays.
-    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-    for s in &scene.surfaces {
-        let base = positions.len() as u32;
-        positions.extend_from_slice(&s.vertices);
-        for k in 1..s.vertices.len().saturating_sub(1) as u32 {
-            triangles.push([base, base + k, base + k + 1]);
-        }
-    }
-    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let accel = scene_accel(scene);
     let offset = scene.diagonal() * 1e-5;
     let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
     let emitters: Vec<usize> = leaves.iter().copied().filter(|&n| nodes.emission[n].max_element() > 0.0).collect();
@@ -441,15 +438,7 @@ fn link_bias(
     let params = radray::radiosity::hierarchical::hierarchy_params(scene);
     let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
     let (nodes, links) = (structure.nodes(), structure.links());
-    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-    for s in &scene.surfaces {
-        let base = positions.len() as u32;
-        positions.extend_from_slice(&s.vertices);
-        for k in 1..s.vertices.len().saturating_sub(1) as u32 {
-            triangles.push([base, base + k, base + k + 1]);
-        }
-    }
-    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let accel = scene_accel(scene);
     let ctx = VisibilityContext { accel: &accel, rays: 1024, offset: scene.diagonal() * 1e-5, seed: 0xb1a5 };
     let inputs = structure.inputs();
     // Whether node n has a leaf on object `name` (any, when no name is given), for every node at once.
@@ -873,15 +862,7 @@ fn coverage(scene: &radray::scene::SceneDescription, name: &str) -> ExitCode {
     let mut objects: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
     objects.sort();
     objects.dedup();
-    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-    for s in &scene.surfaces {
-        let base = positions.len() as u32;
-        positions.extend_from_slice(&s.vertices);
-        for k in 1..s.vertices.len().saturating_sub(1) as u32 {
-            triangles.push([base, base + k, base + k + 1]);
-        }
-    }
-    let accel = radray::accel::Accel::build(&positions, &triangles);
+    let accel = scene_accel(scene);
     let offset = scene.diagonal() * 1e-5;
     use radray::radiosity::hierarchy::form_factor::quadrature_points;
     use radray::transport::hit::leave_surface;
@@ -1015,6 +996,104 @@ fn row_sums_by_object(scene: &radray::scene::SceneDescription, rays: usize) -> E
     let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
     let scales = ArrivalScales::new(nodes, links);
     let sums = radray::radiosity::hierarchy::row_sums::row_sums(nodes, links, &scales);
+    // The same row sums with only one kind of link each: element pairs, far cluster links, near
+    // self-links, other near links (their sum is `sums`).
+    let kind_of = |r: usize, s: usize| {
+        if !nodes.is_cluster[r] && !nodes.is_cluster[s] {
+            0
+        } else if r == s {
+            2
+        } else if is_near(nodes, r, s) {
+            3
+        } else {
+            1
+        }
+    };
+    let records = links.to_records();
+    let by_kind: Vec<Vec<f64>> = (0..4)
+        .map(|kind| {
+            let kept: Vec<_> =
+                records.iter().copied().filter(|l| kind_of(l.receiver as usize, l.source as usize) == kind).collect();
+            let kept = radray::radiosity::hierarchy::links::Links::from_records(nodes.len(), kept);
+            let kept_scales = ArrivalScales::reusing(nodes, &kept, Some(&scales));
+            radray::radiosity::hierarchy::row_sums::row_sums(nodes, &kept, &kept_scales)
+        })
+        .collect();
+    // Per kind: links, Σ A_R·F and Σ A_open,R·F (what they claim to deliver at unit exitance), and
+    // Σ A_open·R over the receiving leaves (what the push delivers).
+    println!("{:<6} {:>10} {:>14} {:>14} {:>14}", "kind", "links", "sum A_R F", "sum Aopen_R F", "sum Aopen R");
+    for (kind, name) in ["elem", "far", "self", "near"].iter().enumerate() {
+        let (mut count, mut claimed, mut claimed_open) = (0usize, 0.0f64, 0.0f64);
+        for l in records.iter().filter(|l| kind_of(l.receiver as usize, l.source as usize) == kind) {
+            let r = l.receiver as usize;
+            count += 1;
+            claimed += nodes.area[r] as f64 * l.form_factor as f64;
+            claimed_open += nodes.open_area[r] as f64 * l.form_factor as f64;
+        }
+        let arrived: f64 = (0..nodes.len())
+            .filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n])
+            .map(|n| nodes.open_area[n] as f64 * by_kind[kind][n])
+            .sum();
+        println!("{name:<6} {count:>10} {claimed:>14.1} {claimed_open:>14.1} {arrived:>14.1}");
+    }
+    // With ROW_SUMS_REESTIMATE=SEED: every link estimated again with rays of another seed (no spread
+    // cap, no threshold), independent of the estimate refinement judged it by; the same table.
+    if let Some(seed) = std::env::var("ROW_SUMS_REESTIMATE").ok().and_then(|v| v.parse::<u64>().ok()) {
+        use radray::radiosity::hierarchy::visibility::VisibilityContext;
+        let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+        let accel = scene_accel(scene);
+        let ctx = VisibilityContext {
+            accel: &accel,
+            rays: params.visibility_rays,
+            offset: scene.diagonal() * 1e-5,
+            seed: params.seed ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15),
+        };
+        let again: Vec<_> = records
+            .par_iter()
+            .map(|l| {
+                let (r, s) = (l.receiver as usize, l.source as usize);
+                let f =
+                    radray::radiosity::hierarchy::links::estimate(nodes, &ctx, r, s, f32::INFINITY, f64::INFINITY, 0.0)
+                        .map_or(0.0, |(f, _)| f);
+                radray::radiosity::hierarchy::links::LinkRecord { form_factor: f, ..*l }
+            })
+            .collect();
+        println!("re-estimated (seed {seed}):");
+        println!("{:<6} {:>10} {:>14} {:>14} {:>14}", "kind", "links", "sum A_R F", "again", "Aopen R again");
+        let mut total = vec![0.0f64; nodes.len()];
+        for (kind, name) in ["elem", "far", "self", "near"].iter().enumerate() {
+            let (mut count, mut before, mut after) = (0usize, 0.0f64, 0.0f64);
+            let mut kept = Vec::new();
+            for (l, a) in records.iter().zip(&again) {
+                if kind_of(l.receiver as usize, l.source as usize) == kind {
+                    count += 1;
+                    before += nodes.area[l.receiver as usize] as f64 * l.form_factor as f64;
+                    after += nodes.area[l.receiver as usize] as f64 * a.form_factor as f64;
+                    kept.push(*a);
+                }
+            }
+            let kept = radray::radiosity::hierarchy::links::Links::from_records(nodes.len(), kept);
+            let kept_scales = ArrivalScales::reusing(nodes, &kept, Some(&scales));
+            let sums = radray::radiosity::hierarchy::row_sums::row_sums(nodes, &kept, &kept_scales);
+            let arrived: f64 = (0..nodes.len())
+                .filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n])
+                .map(|n| {
+                    total[n] += sums[n];
+                    nodes.open_area[n] as f64 * sums[n]
+                })
+                .sum();
+            println!("{name:<6} {count:>10} {before:>14.1} {after:>14.1} {arrived:>14.1}");
+        }
+        let (mut a, mut ar) = (0.0f64, 0.0f64);
+        for n in (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]) {
+            if nodes.open_area[n] > 0.0 && nodes.reflectance[n].max_element() > 0.0 {
+                a += nodes.open_area[n] as f64;
+                ar += nodes.open_area[n] as f64 * total[n];
+            }
+        }
+        println!("R again (area-weighted over receiving leaves): {:.3}", ar / a);
+    }
+    drop(records);
     let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
     let tracer = LeafTracer::new(nodes, inputs, &leaves);
     let offset = scene.diagonal() * 1e-5;
@@ -1037,16 +1116,26 @@ fn row_sums_by_object(scene: &radray::scene::SceneDescription, rays: usize) -> E
             facing as f64 / rays as f64
         })
         .collect();
-    // Per (object, sheet): [area, Σ A·R, Σ A·rays, Σ A·|R − rays|, leaves].
-    let mut rows: std::collections::BTreeMap<(String, bool), [f64; 5]> = Default::default();
-    let mut all = [0.0f64; 5];
+    // Per (object, sheet): [area, Σ A·R, Σ A·rays, Σ A·|R − rays|, leaves, Σ A·R by kind ×4].
+    let mut rows: std::collections::BTreeMap<(String, bool), [f64; 9]> = Default::default();
+    let mut all = [0.0f64; 9];
     for (&e, &h) in receiving.iter().zip(&seen) {
         let input = nodes.input[e] as usize;
         let key = (scene.surfaces[inputs.surface[input] as usize].object.clone(), inputs.back[input]);
         let a = nodes.open_area[e] as f64;
-        let add = [a, a * sums[e], a * h, a * (sums[e] - h).abs(), 1.0];
-        let row = rows.entry(key).or_insert([0.0; 5]);
-        for i in 0..5 {
+        let add = [
+            a,
+            a * sums[e],
+            a * h,
+            a * (sums[e] - h).abs(),
+            1.0,
+            a * by_kind[0][e],
+            a * by_kind[1][e],
+            a * by_kind[2][e],
+            a * by_kind[3][e],
+        ];
+        let row = rows.entry(key).or_insert([0.0; 9]);
+        for i in 0..9 {
             row[i] += add[i];
             all[i] += add[i];
         }
@@ -1054,18 +1143,23 @@ fn row_sums_by_object(scene: &radray::scene::SceneDescription, rays: usize) -> E
     let mut rows: Vec<_> = rows.into_iter().collect();
     rows.sort_by(|a, b| b.1[3].total_cmp(&a.1[3]));
     println!("{rays} cosine rays per leaf; R = the links' row sum, rays = the share meeting a facing surface");
+    println!("R by link kind: element pairs, far cluster links, near self-links, other near links");
     println!(
-        "{:<28} {:>5} {:>9} {:>12} {:>7} {:>7} {:>9}",
-        "object", "sheet", "leaves", "area", "R", "rays", "|R-rays|"
+        "{:<28} {:>5} {:>9} {:>12} {:>7} {:>7} {:>9} {:>7} {:>7} {:>7} {:>7}",
+        "object", "sheet", "leaves", "area", "R", "rays", "|R-rays|", "elem", "far", "self", "near"
     );
-    let line = |name: &str, sheet: &str, r: &[f64; 5]| {
+    let line = |name: &str, sheet: &str, r: &[f64; 9]| {
         println!(
-            "{name:<28} {sheet:>5} {:>9} {:>12.1} {:>7.3} {:>7.3} {:>9.3}",
+            "{name:<28} {sheet:>5} {:>9} {:>12.1} {:>7.3} {:>7.3} {:>9.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3}",
             r[4] as usize,
             r[0],
             r[1] / r[0],
             r[2] / r[0],
-            r[3] / r[0]
+            r[3] / r[0],
+            r[5] / r[0],
+            r[6] / r[0],
+            r[7] / r[0],
+            r[8] / r[0]
         )
     };
     line("all", "both", &all);
@@ -1298,6 +1392,19 @@ impl LeafTracer {
 type UnlinkedRow = (Vec<f64>, Vec<(usize, usize)>);
 
 /// The scene solved at its own parameters, or `None` with the error printed.
+/// The scene's surfaces fanned into triangles, for visibility and cosine rays.
+fn scene_accel(scene: &radray::scene::SceneDescription) -> radray::accel::Accel {
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for s in &scene.surfaces {
+        let base = positions.len() as u32;
+        positions.extend_from_slice(&s.vertices);
+        for k in 1..s.vertices.len().saturating_sub(1) as u32 {
+            triangles.push([base, base + k, base + k + 1]);
+        }
+    }
+    radray::accel::Accel::build(&positions, &triangles)
+}
+
 fn solved(scene: &radray::scene::SceneDescription) -> Option<radray::radiosity::hierarchy::LinkStructure> {
     let params = radray::radiosity::hierarchical::hierarchy_params(scene);
     match solve_reusing(scene, Default::default(), &params, None, &mut |_| {}) {
