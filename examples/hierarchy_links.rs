@@ -637,15 +637,34 @@ fn sent_by_object(scene: &radray::scene::SceneDescription, name: &str) -> ExitCo
     ExitCode::SUCCESS
 }
 
+/// One leaf of the `--gathered` report: its normal's bin, open area, what its links bring by kind,
+/// what rays bring, the share of rays escaping, the links with directional cluster sources, and the
+/// links with near cluster sources read through their samples (occluded, unoccluded).
+type GatheredRow = (usize, f64, [f64; 5], f64, f64, f64, (f64, f64));
+
 /// The `--gathered` report.
 fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String]) -> ExitCode {
     use rayon::prelude::*;
     let Some(structure) = solved(scene) else { return ExitCode::FAILURE };
     let (nodes, links, inputs) = (structure.nodes(), structure.links(), structure.inputs());
     let scales = ArrivalScales::new(nodes, links);
+    // What the sweeps send over far links from clusters (`lobes`).
+    let lobes = radray::radiosity::hierarchy::lobes::Lobes::new(nodes, links, structure.root());
     let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
     let front: Vec<usize> = leaves.iter().copied().filter(|&n| !inputs.back[nodes.input[n] as usize]).collect();
     let tracer = LeafTracer::new(nodes, inputs, &leaves);
+    let params = radray::radiosity::hierarchical::hierarchy_params(scene);
+    let accel = scene_accel(scene);
+    let ctx = radray::radiosity::hierarchy::visibility::VisibilityContext {
+        accel: &accel,
+        rays: params.visibility_rays,
+        offset: scene.diagonal() * 1e-5,
+        seed: params.seed,
+    };
+    // Nothing to block a ray: what the same samples read unoccluded.
+    let far = glam::Vec3::splat(1e7);
+    let nothing = radray::accel::Accel::build(&[far, far + glam::Vec3::X, far + glam::Vec3::Y], &[[0, 1, 2]]);
+    let open_ctx = radray::radiosity::hierarchy::visibility::VisibilityContext { accel: &nothing, ..ctx };
     let offset = scene.diagonal() * 1e-5;
     let mean = |v: DVec3| (v.x + v.y + v.z) / 3.0;
     let mut objects_all: Vec<String> = scene.surfaces.iter().map(|s| s.object.clone()).collect();
@@ -665,13 +684,64 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                     && nodes.open_area[e] > 0.0
             })
             .collect();
-        let rows: Vec<(usize, f64, [f64; 5], f64, f64, f64)> = mine
+        // What each near link with a cluster source reads through its samples, once per link of
+        // the leaves' ancestors.
+        let mut receivers: Vec<usize> = Vec::new();
+        for &e in &mine {
+            let mut up = e as u32;
+            while up != u32::MAX {
+                receivers.push(up as usize);
+                up = nodes.parent[up as usize];
+            }
+        }
+        receivers.sort_unstable();
+        receivers.dedup();
+        let sampled: std::collections::HashMap<usize, (f64, f64)> = receivers
+            .par_iter()
+            .flat_map_iter(|&a| {
+                links.range(a).filter_map(move |k| {
+                    let s = links.source[k] as usize;
+                    (nodes.is_cluster[s] && is_near(nodes, a, s)).then_some((k, a, s))
+                })
+            })
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .filter_map(|(k, a, s)| {
+                let b = sample_read(nodes, &ctx, a, s)?;
+                Some((k, (b, sample_read(nodes, &open_ctx, a, s).unwrap_or(b))))
+            })
+            .collect();
+        // By the kind of the link a transfer goes through (links) or would (rays: the link joining an
+        // ancestor-or-self of the leaf to one of the leaf hit): [links, links with sampled reads, rays]
+        // for element source (leaf), element source (subdivided), far cluster, near cluster, self, none.
+        let set = linked_pairs(links);
+        let link_kind = |a: usize, s: usize| {
+            if a == s {
+                4
+            } else if nodes.is_cluster[s] {
+                if is_near(nodes, a, s) {
+                    3
+                } else {
+                    2
+                }
+            } else if nodes.is_leaf(s) {
+                0
+            } else {
+                1
+            }
+        };
+        let by_source_kind = std::sync::Mutex::new([[0.0f64; 3]; 6]);
+        let rows: Vec<GatheredRow> = mine
             .par_iter()
             .map(|&e| {
                 let member = inputs.node[nodes.input[e] as usize] as usize;
                 let mut by_kind = [0.0f64; 5];
+                let mut per_source_kind = [[0.0f64; 3]; 6];
+                let up_e = ancestors_of(nodes, e);
                 let mut direct_by_kind = [0.0f64; 5];
                 let mut directional = 0.0f64;
+                let mut read = 0.0f64;
+                let mut read_open = 0.0f64;
                 let mut per_object = vec![0.0f64; 2 * objects_all.len()];
                 let mut up = e as u32;
                 while up != u32::MAX {
@@ -679,7 +749,9 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                     let reach = scales.receiver(a);
                     for (i, k) in links.range(a).enumerate() {
                         let s = links.source[k] as usize;
-                        let sent = scales.sent(nodes, links, a, k, &nodes.exitance);
+                        let sent = lobes
+                            .sent_over(nodes, k, a, s)
+                            .unwrap_or_else(|| scales.sent(nodes, links, a, k, &nodes.exitance));
                         let t = mean(sent - nodes.emission[s].as_dvec3()) * links.form_factor[k] as f64;
                         let t_direct = mean(nodes.emission[s].as_dvec3()) * links.form_factor[k] as f64;
                         let (gain, kind) = if !nodes.is_cluster[a] {
@@ -712,6 +784,14 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                             t
                         };
                         directional += t_dir * gain;
+                        // The same link sending the exitance its own samples see of a cluster source
+                        // (Σ_k w_k B(t_k) / Σ_k w_k, `visibility::sampled_form_factor_reads`).
+                        read += gain
+                            * sampled.get(&k).map_or(t, |b| b.0 * links.form_factor[k] as f64);
+                        read_open += gain * sampled.get(&k).map_or(t, |b| b.1 * links.form_factor[k] as f64);
+                        let kind = link_kind(a, s);
+                        per_source_kind[kind][0] += gain * t;
+                        per_source_kind[kind][1] += gain * sampled.get(&k).map_or(t, |b| b.0 * links.form_factor[k] as f64);
                         // By source object: an element's own; a cluster's members by their share of
                         // the directional transfer.
                         if nodes.is_cluster[s] {
@@ -749,6 +829,14 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                         RayEnd::Facing(l) => {
                             let b = mean(nodes.exitance[l] - nodes.emission[l].as_dvec3());
                             g += b;
+                            let up_l = ancestors_of(nodes, l);
+                            let kind = up_e
+                                .iter()
+                                .find_map(|&a| {
+                                    up_l.iter().find(|&&c| set.contains(&(a, c))).map(|&c| link_kind(a as usize, c as usize))
+                                })
+                                .unwrap_or(5);
+                            per_source_kind[kind][2] += b / RAYS as f64;
                             per_object[objects_all.len() + object_of(l)] += b / RAYS as f64;
                         }
                         RayEnd::Behind => {}
@@ -789,23 +877,34 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 };
                 let open = nodes.open_area[e] as f64;
                 {
+                    let mut sums = by_source_kind.lock().unwrap();
+                    for (kind, v) in per_source_kind.iter().enumerate() {
+                        for j in 0..3 {
+                            sums[kind][j] += open * v[j];
+                        }
+                    }
+                }
+                {
                     let mut sums = by_object.lock().unwrap();
                     for (o, v) in per_object.iter().enumerate() {
                         sums[o] += open * v;
                     }
                 }
-                (bin, open, by_kind, g / RAYS as f64, escaped as f64 / RAYS as f64, directional)
+                (bin, open, by_kind, g / RAYS as f64, escaped as f64 / RAYS as f64, directional, (read, read_open))
             })
             .collect();
         println!(
             "object {name}: Σ A·G (W) from the links (element, shares, far arrival, near arrival, uniform) vs rays"
         );
         for (bin, label) in ["facing down", "sideways", "facing up"].iter().enumerate() {
-            let (mut a, mut kinds, mut rays, mut open, mut directional) = (0.0, [0.0f64; 5], 0.0, 0.0, 0.0);
-            for (b, area, k, g, escaped, dir) in &rows {
+            let (mut a, mut kinds, mut rays, mut open, mut directional, mut read, mut read_open) =
+                (0.0, [0.0f64; 5], 0.0, 0.0, 0.0, 0.0, 0.0);
+            for (b, area, k, g, escaped, dir, sampled) in &rows {
                 if *b == bin {
                     a += area;
                     directional += area * dir;
+                    read += area * sampled.0;
+                    read_open += area * sampled.1;
                     open += area * escaped;
                     for i in 0..5 {
                         kinds[i] += area * k[i];
@@ -815,7 +914,7 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
             }
             let links_total: f64 = kinds.iter().sum();
             println!(
-                "  {label:>11} (area {a:.3}): links {links_total:.4} = {:.4} + {:.4} + {:.4} + {:.4} + {:.4}; rays {rays:.4} ({:+.1}%); rays escaping {:.1}%; directional cluster sources {:.4} ({:+.1}%)",
+                "  {label:>11} (area {a:.3}): links {links_total:.4} = {:.4} + {:.4} + {:.4} + {:.4} + {:.4}; rays {rays:.4} ({:+.1}%); rays escaping {:.1}%; directional cluster sources {:.4} ({:+.1}%); sampled reads {:.4} ({:+.1}%), unoccluded {:.4} ({:+.1}%)",
                 kinds[0],
                 kinds[1],
                 kinds[2],
@@ -824,8 +923,19 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 100.0 * (links_total / rays - 1.0),
                 100.0 * open / a.max(1e-30),
                 directional,
-                100.0 * (directional / rays - 1.0)
+                100.0 * (directional / rays - 1.0),
+                read,
+                100.0 * (read / rays - 1.0),
+                read_open,
+                100.0 * (read_open / rays - 1.0)
             );
+        }
+        println!("  by the link's kind (links, links with sampled reads, rays through that kind of link):");
+        let kinds = by_source_kind.into_inner().unwrap();
+        for (label, v) in
+            ["element leaf", "element split", "far cluster", "near cluster", "self", "none"].iter().zip(kinds)
+        {
+            println!("    {label:>13}: links {:.2} W, sampled reads {:.2} W, rays {:.2} W", v[0], v[1], v[2]);
         }
         let sums = by_object.into_inner().unwrap();
         let n = objects_all.len();
@@ -1393,6 +1503,40 @@ type UnlinkedRow = (Vec<f64>, Vec<(usize, usize)>);
 
 /// The scene solved at its own parameters, or `None` with the error printed.
 /// The scene's surfaces fanned into triangles, for visibility and cosine rays.
+/// What near link (receiver ← source) reads of its cluster source through its own samples: Σ_k
+/// w_k B(t_k) / Σ_k w_k over the source elements the samples see (emission left out), leaf pair by
+/// leaf pair (w = A_r F(r ← s) V) where the link is integrated that way; `None` when nothing is seen.
+fn sample_read(
+    nodes: &radray::radiosity::hierarchy::nodes::Nodes,
+    ctx: &radray::radiosity::hierarchy::visibility::VisibilityContext,
+    receiver: usize,
+    source: usize,
+) -> Option<f64> {
+    use radray::radiosity::hierarchy::links::{leaves_below, EXACT_NEAR_PAIRS};
+    let mean = |v: DVec3| (v.x + v.y + v.z) / 3.0;
+    let (mut rs, mut ss) = (Vec::new(), Vec::new());
+    let mut reads = Vec::new();
+    if leaves_below(nodes, receiver, EXACT_NEAR_PAIRS, &mut rs)
+        && leaves_below(nodes, source, EXACT_NEAR_PAIRS, &mut ss)
+        && rs.len() * ss.len() <= EXACT_NEAR_PAIRS
+    {
+        for &r in &rs {
+            for &s in &ss {
+                if r != s {
+                    let (f, _) = element_to_element(&nodes.corners[r], nodes.normal[r], &nodes.corners[s]);
+                    reads.push((s, nodes.area[r] as f64 * f));
+                }
+            }
+        }
+    } else {
+        radray::radiosity::hierarchy::visibility::sampled_form_factor_reads(ctx, nodes, receiver, source, &mut reads);
+    }
+    let total: f64 = reads.iter().map(|&(_, w)| w).sum();
+    (total > 0.0).then(|| {
+        reads.iter().map(|&(t, w)| w * mean(nodes.exitance[t] - nodes.emission[t].as_dvec3())).sum::<f64>() / total
+    })
+}
+
 fn scene_accel(scene: &radray::scene::SceneDescription) -> radray::accel::Accel {
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     for s in &scene.surfaces {

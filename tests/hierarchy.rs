@@ -1589,3 +1589,91 @@ fn the_positional_spread_moves_light_between_leaves_and_conserves_it() {
     assert!(moved_w.abs() <= 1e-9 * total_w, "net {moved_w} W of {total_w} W");
     assert!(largest_change > 0.01, "largest relative change {largest_change}");
 }
+
+/// A far link from a cluster sends the exitance of the members that face its receiver
+/// (`lobes::Lobes`), not the cluster's area mean: two squares back to back 0.2 apart, the one facing
+/// +x at exitance 1 and the one facing −x at 0 (area mean 1/2), seen from patches 20 away along +x.
+/// With the members' normals along the axes the six lobes are exact: the patch is sent 1, the
+/// direction −x is sent 0, and a direction between +x and +y (no member faces +y) sends the +x
+/// member's 1 too, and the far link's gather reads it. A uniform cluster sends its exitance in every
+/// direction.
+#[test]
+fn a_far_cluster_source_sends_the_exitance_of_the_members_facing_the_receiver() {
+    use radray::radiosity::hierarchy::lobes::Lobes;
+    let square = |x: f32, facing: f32| {
+        let p = [Vec3::new(x, -0.5, -0.5), Vec3::new(x, 0.5, -0.5), Vec3::new(x, 0.5, 0.5), Vec3::new(x, -0.5, 0.5)];
+        if facing > 0.0 {
+            p.to_vec()
+        } else {
+            p.iter().rev().copied().collect()
+        }
+    };
+    // Two patches side by side: four triangles on either side of any median split along x.
+    let patch = square(20.0, -1.0);
+    let beside: Vec<Vec3> = patch.iter().map(|&p| p + Vec3::new(0.0, 0.0, 1.5)).collect();
+    let scene = scene_of(vec![
+        (square(0.1, 1.0), 0.5, std::f32::consts::FRAC_1_PI),
+        (square(-0.1, -1.0), 0.5, 0.0),
+        (patch, 0.5, 0.0),
+        (beside, 0.5, 0.0),
+    ]);
+    let (mut nodes, root, inputs, _) = clusters::build(&scene).unwrap();
+    let root = root as usize;
+    let surface = |n: usize| inputs.surface[nodes.input[n] as usize];
+    // The cluster holding exactly the two back-to-back squares' four triangles.
+    let mut members = Vec::new();
+    let pair = (0..nodes.len())
+        .find(|&n| {
+            nodes.is_cluster[n] && {
+                nodes.members(n, &mut members);
+                members.len() == 4 && members.iter().all(|&m| surface(m) < 2)
+            }
+        })
+        .expect("a cluster of the two squares");
+    // Exitance 1 on the square facing +x (its emission), 0 elsewhere, pulled up the tree.
+    hsolve::reset_to_emission(&mut nodes, root);
+    assert!((nodes.exitance[pair].x - 0.5).abs() < 1e-9, "area mean {}", nodes.exitance[pair]);
+    let no_links = hierarchy::links::Links::from_records(nodes.len(), Vec::new());
+    let lobes = Lobes::new(&nodes, &no_links, root);
+    let sent = |omega: Vec3| lobes.sent(pair, omega.normalize()).expect("members face ω").x;
+    assert!((sent(Vec3::X) - 1.0).abs() < 1e-9, "towards +x {}", sent(Vec3::X));
+    assert!(sent(Vec3::NEG_X).abs() < 1e-9, "towards -x {}", sent(Vec3::NEG_X));
+    assert!((sent(Vec3::new(1.0, 1.0, 0.0)) - 1.0).abs() < 1e-9);
+    assert!((sent(Vec3::new(1.0, 0.0, -1.0)) - 1.0).abs() < 1e-9);
+    // Through a far link in the gather: the patch (its triangles' cluster, or the triangle itself)
+    // gathers F·1.
+    let receiver = inputs.node[4] as usize;
+    assert!(hierarchy::links::admissible(&nodes, receiver, pair), "the link is far");
+    let links = hierarchy::links::Links::from_records(
+        nodes.len(),
+        vec![hierarchy::links::LinkRecord {
+            receiver: receiver as u32,
+            source: pair as u32,
+            form_factor: 1e-3,
+            spread: 0.0,
+        }],
+    );
+    let scales = gather::ArrivalScales::new(&nodes, &links);
+    let lobes = Lobes::new(&nodes, &links, root);
+    let (mut arrivals, mut direct) = (Vec::new(), Vec::new());
+    let (_, mean) = gather::gather_into(
+        &nodes,
+        &links,
+        &scales,
+        receiver,
+        &nodes.exitance,
+        Some(&lobes),
+        &mut arrivals,
+        &mut direct,
+    );
+    assert!((mean.x / 1e-3 - 1.0).abs() < 1e-6, "sent {}", mean.x / 1e-3);
+    // Uniform exitance: the same in every direction.
+    for n in 0..nodes.len() {
+        nodes.exitance[n] = DVec3::splat(0.3);
+    }
+    let lobes = Lobes::new(&nodes, &links, root);
+    for omega in [Vec3::X, Vec3::NEG_X, Vec3::new(0.3, -0.8, 0.5), Vec3::new(-1.0, 0.2, 0.1)] {
+        let b = lobes.sent(pair, omega.normalize()).map_or(f64::NAN, |b| b.x);
+        assert!((b - 0.3).abs() < 1e-12, "towards {omega}: {b}");
+    }
+}

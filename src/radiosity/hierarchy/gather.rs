@@ -10,6 +10,7 @@ use rayon::prelude::*;
 
 use super::form_factor::point_to_polygon;
 use super::links::{is_near, Links};
+use super::lobes::Lobes;
 use super::nodes::Nodes;
 use super::row_sums::{row_sums, LeafGains};
 use super::source_weights::{Cursor, SourceWeights};
@@ -717,8 +718,11 @@ pub fn arrival_direction(nodes: &Nodes, receiver: usize, source: usize) -> Optio
 ///
 /// G_R = Σ_{S linked to R} F_RS · B̂_S  (W/m², as a mean over R: the returned `mean`),
 ///
-/// B̂_S the exitance the link sends (`source_weights`: its source's pieces weighted by how the
-/// receiver sees them when the source is a subdivided element, else B_S), summed in link order (a fixed order, so the sum is reproducible). For a cluster receiver
+/// B̂_S the exitance the link sends: its source's pieces weighted by how the receiver sees them when
+/// the source is a subdivided element (`source_weights`); the exitance of the members facing the
+/// receiver when the link is far, its source a cluster and `lobes` are given (`lobes`, the sweeps
+/// give them); else B_S. Summed in link order (a fixed order, so the sum is reproducible). For a
+/// cluster receiver
 /// (`ArrivalScales`): a link with member shares adds F_RS·B_S·c_i to member i (pushed to `direct`);
 /// a link with a direction ω (`arrival_direction`) and a scale s becomes an `Arrival` of head-on
 /// irradiance w = s·F_RS·B_S appended to `arrivals`; the rest adds to the returned uniform part. For
@@ -727,12 +731,14 @@ pub fn arrival_direction(nodes: &Nodes, receiver: usize, source: usize) -> Optio
 /// approximation (shares serve most near links) and the power is still the link's.
 ///
 /// Returns (uniform, mean).
+#[allow(clippy::too_many_arguments)]
 pub fn gather_into(
     nodes: &Nodes,
     links: &Links,
     scales: &ArrivalScales,
     receiver: usize,
     exitance: &[DVec3],
+    lobes: Option<&Lobes>,
     arrivals: &mut Vec<Arrival>,
     direct: &mut Vec<(usize, DVec3)>,
 ) -> (DVec3, DVec3) {
@@ -742,7 +748,12 @@ pub fn gather_into(
     let mut sent = scales.sent_cursor(receiver);
     for (i, k) in links.range(receiver).enumerate() {
         let s = links.source[k] as usize;
-        let transfer = sent.sent(nodes, receiver, s, exitance) * links.form_factor[k] as f64;
+        let directional = lobes.and_then(|l| l.sent_over(nodes, k, receiver, s));
+        let b = match directional {
+            Some(b) => b,
+            None => sent.sent(nodes, receiver, s, exitance),
+        };
+        let transfer = b * links.form_factor[k] as f64;
         mean += transfer;
         if !cluster {
             uniform += transfer;
@@ -761,7 +772,7 @@ pub fn gather_into(
 /// `gather_into` as one value.
 pub fn gather(nodes: &Nodes, links: &Links, scales: &ArrivalScales, receiver: usize, exitance: &[DVec3]) -> Irradiance {
     let (mut arrivals, mut direct) = (Vec::new(), Vec::new());
-    let (uniform, mean) = gather_into(nodes, links, scales, receiver, exitance, &mut arrivals, &mut direct);
+    let (uniform, mean) = gather_into(nodes, links, scales, receiver, exitance, None, &mut arrivals, &mut direct);
     Irradiance { uniform, arrivals, direct, mean }
 }
 

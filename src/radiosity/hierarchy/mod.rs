@@ -34,6 +34,7 @@ pub mod gather;
 pub mod interpolate;
 pub mod links;
 pub mod links_file;
+pub mod lobes;
 pub mod nodes;
 pub mod part_file;
 pub mod positional_spread;

@@ -193,7 +193,7 @@ fn cluster_moves(nodes: &Nodes, links: &Links, scales: &ArrivalScales, flat: &[V
         }
         if nodes.is_cluster[n] {
             direct.clear();
-            gather_into(nodes, links, scales, n, &nodes.exitance, &mut arrivals, &mut direct);
+            gather_into(nodes, links, scales, n, &nodes.exitance, None, &mut arrivals, &mut direct);
             share_moves(nodes, links, scales, flat, n, moves);
             let here = arrivals.len();
             stack.extend(nodes.children(n).rev().map(|c| (c, here)));

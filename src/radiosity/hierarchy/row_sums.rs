@@ -44,7 +44,7 @@ pub fn row_sums(nodes: &Nodes, links: &Links, scales: &ArrivalScales) -> Vec<f64
         let mut stack: Vec<(usize, Pushed)> = vec![(root, Pushed::default())];
         while let Some((n, down)) = stack.pop() {
             arrivals.truncate(down.hi);
-            let (own_uniform, _) = gather_into(nodes, links, scales, n, &unit, &mut arrivals, &mut direct);
+            let (own_uniform, _) = gather_into(nodes, links, scales, n, &unit, None, &mut arrivals, &mut direct);
             for (m, g) in direct.drain(..) {
                 pending[m] += g;
             }

@@ -5,6 +5,7 @@
 
 use super::gather::{gather_into, leaf_exitance, pulled, push_step, Arrival, ArrivalScales, Pushed};
 use super::links::Links;
+use super::lobes::Lobes;
 use super::nodes::{mean_channel, Nodes};
 use glam::DVec3;
 
@@ -28,7 +29,14 @@ pub struct SweepChange {
 /// `scales` are the links' `ArrivalScales`. Serial and in a fixed order, so the result does not
 /// depend on threads. Updates `exitance`, `exitance_mean` and `gathered` (own links only) of every
 /// node.
-pub fn sweep(nodes: &mut Nodes, links: &Links, scales: &ArrivalScales, root: usize, relaxation: f64) -> SweepChange {
+pub fn sweep(
+    nodes: &mut Nodes,
+    links: &Links,
+    scales: &ArrivalScales,
+    lobes: &mut Lobes,
+    root: usize,
+    relaxation: f64,
+) -> SweepChange {
     let mut change = SweepChange::default();
     // The pending arrivals of the current path (`gather::Pushed` holds each node's range of it).
     let mut arrivals: Vec<Arrival> = Vec::new();
@@ -42,10 +50,12 @@ pub fn sweep(nodes: &mut Nodes, links: &Links, scales: &ArrivalScales, root: usi
             let b = pulled(nodes, n, &nodes.exitance);
             nodes.exitance[n] = b;
             nodes.exitance_mean[n] = mean_channel(nodes.exitance[n]);
+            lobes.pull(nodes, n);
             continue;
         }
         arrivals.truncate(down.hi);
-        let (own_uniform, own_mean) = gather_into(nodes, links, scales, n, &nodes.exitance, &mut arrivals, &mut direct);
+        let (own_uniform, own_mean) =
+            gather_into(nodes, links, scales, n, &nodes.exitance, Some(lobes), &mut arrivals, &mut direct);
         nodes.gathered[n] = own_mean;
         for (m, g) in direct.drain(..) {
             pending[m] += g;
@@ -106,15 +116,17 @@ pub fn solve_until(
     stop: &dyn Fn() -> bool,
 ) -> Option<(u32, bool)> {
     let limit = exitance_limit(nodes, root);
+    let mut lobes = Lobes::new(nodes, links, root);
     for k in 1..=max_sweeps {
         if stop() {
             return None;
         }
-        let c = sweep(nodes, links, scales, root, relaxation);
+        let c = sweep(nodes, links, scales, &mut lobes, root, relaxation);
         on_sweep(k, c);
         if c.max_exitance > limit && !scales.rows_bounded() {
             scales.bound_rows(nodes, links);
             reset_to_emission(nodes, root);
+            lobes = Lobes::new(nodes, links, root);
             continue;
         }
         if c.max_change <= tolerance * c.max_exitance {

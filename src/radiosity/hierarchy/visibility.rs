@@ -511,6 +511,20 @@ pub fn sampled_form_factor(
     receiver: usize,
     source: usize,
 ) -> SampledFormFactor {
+    sampled_form_factor_reads(ctx, nodes, receiver, source, &mut Vec::new())
+}
+
+/// `sampled_form_factor`, also writing into `reads` each sample's source element t_k and its part
+/// of N·F_RS (F_k V_k, or F_k V̄ for a sample without a ray): Σ_k w_k B(t_k) / Σ_k w_k is the
+/// exitance the samples see of the source.
+pub fn sampled_form_factor_reads(
+    ctx: &VisibilityContext,
+    nodes: &Nodes,
+    receiver: usize,
+    source: usize,
+    reads: &mut Vec<(usize, f64)>,
+) -> SampledFormFactor {
+    reads.clear();
     let n = ctx.rays.max(1) * NEAR_SAMPLES_PER_RAY;
     let (at_receiver, at_source) = EndPattern::pair(link_seed(ctx.seed ^ 0x5eed_f0f0, nodes, receiver, source));
     // Σ F_k V_k and Σ F_k over samples with a visibility ray; Σ F_k over samples without one.
@@ -546,6 +560,7 @@ pub fn sampled_form_factor(
         tested += f;
         if unoccluded(ctx, nodes, receiver, source, &mut clear, (x, nx), (y, ny)) {
             seen += f;
+            reads.push((t, f));
         }
     }
     let mean_visibility = if tested > 0.0 {
@@ -569,6 +584,7 @@ pub fn sampled_form_factor(
             0.0
         }
     };
+    reads.extend(without_ray.iter().map(|&(_, _, t, f)| (t, f * mean_visibility)));
     let form_factor = ((seen + untested * mean_visibility) / n as f64).min(1.0);
     let unoccluded_mean = (tested + untested) / n as f64;
     let deviation = mean_visibility * receiver_deviation(&unoccluded_f, n as usize)
