@@ -1595,8 +1595,8 @@ fn the_positional_spread_moves_light_between_leaves_and_conserves_it() {
 /// +x at exitance 1 and the one facing −x at 0 (area mean 1/2), seen from patches 20 away along +x.
 /// With the members' normals along the axes the six lobes are exact: the patch is sent 1, the
 /// direction −x is sent 0, and a direction between +x and +y (no member faces +y) sends the +x
-/// member's 1 too, and the far link's gather reads it. A uniform cluster sends its exitance in every
-/// direction.
+/// member's 1 too, and the far link's gather reads it; links whose ends overlap keep the area mean.
+/// A uniform cluster sends its exitance in every direction.
 #[test]
 fn a_far_cluster_source_sends_the_exitance_of_the_members_facing_the_receiver() {
     use radray::radiosity::hierarchy::lobes::Lobes;
@@ -1644,6 +1644,10 @@ fn a_far_cluster_source_sends_the_exitance_of_the_members_facing_the_receiver() 
     // gathers F·1.
     let receiver = inputs.node[4] as usize;
     assert!(hierarchy::links::admissible(&nodes, receiver, pair), "the link is far");
+    assert!(hierarchy::lobes::sends_directionally(&nodes, receiver, pair));
+    // Ends that overlap (the root around the pair, the pair's self-link) send the area mean.
+    assert!(!hierarchy::lobes::sends_directionally(&nodes, root, pair));
+    assert!(!hierarchy::lobes::sends_directionally(&nodes, pair, pair));
     let links = hierarchy::links::Links::from_records(
         nodes.len(),
         vec![hierarchy::links::LinkRecord {

@@ -23,12 +23,18 @@
 //! both pulled up the tree with the exitance (Φ of a cluster is the sum of its children's, an element
 //! child's is its own term). It is exact when the members' normals lie along the axes or the exitance
 //! is uniform (B̂ = B for any ω, so a uniform cluster sends what it did before), and sends B_S where
-//! no member faces the lobes of ω (P = 0). Near links keep the area mean: between overlapping ends
-//! the direction between the centres says little.
+//! no member faces the lobes of ω (P = 0).
+//!
+//! Links whose ends' bounding spheres overlap (self-links, a cluster around its receiver) keep the
+//! area mean: there the direction between the centres says nothing of which members the receiver
+//! sees (with lobes on every near link cornell_empty went from 3.24e-5 to 5.33e-5 in relMSE). Near
+//! links with disjoint spheres (within `links::FAR_DISTANCE_FACTOR` sums of the radii, or a cluster
+//! straddling an element's plane) use the lobes like far ones: Sponza 0.0729 → 0.0720 and gap_room
+//! −2.6%, the other rooms within 0.6% (session 26, docs/accuracy.md).
 
 use glam::{DVec3, Vec3};
 
-use super::links::{is_near, Links};
+use super::links::Links;
 use super::nodes::Nodes;
 
 /// The lobes' axes e_a.
@@ -40,6 +46,14 @@ const NO_SLOT: u32 = u32::MAX;
 /// w_a = max(0, ω·e_a)² for a unit ω: Σ_a w_a = 1.
 pub fn lobe_weights(omega: Vec3) -> [f64; 6] {
     AXES.map(|e| (omega.dot(e).max(0.0) as f64).powi(2))
+}
+
+/// Whether link (receiver ← source) sends B̂_S(ω): its source is a cluster and the ends' bounding
+/// spheres are disjoint (every far link, `links::admissible`, and the near ones between 1 and
+/// `links::FAR_DISTANCE_FACTOR` sums of the radii apart).
+pub fn sends_directionally(nodes: &Nodes, receiver: usize, source: usize) -> bool {
+    nodes.is_cluster[source]
+        && nodes.centre[receiver].distance(nodes.centre[source]) > nodes.radius[receiver] + nodes.radius[source]
 }
 
 /// One element's lobes: A_open max(0, n·e_a), a projected open area per axis.
@@ -57,7 +71,7 @@ pub struct Lobes {
     projected: Vec<[f64; 6]>,
     /// Per cluster: Φ_a (W).
     radiant: Vec<[DVec3; 6]>,
-    /// Per link: it is far and its source a cluster (it sends B̂_S(ω)).
+    /// Per link: its source is a cluster and the ends' spheres are disjoint (it sends B̂_S(ω)).
     directional: Vec<bool>,
 }
 
@@ -80,7 +94,7 @@ impl Lobes {
         for r in 0..node_count {
             for k in links.range(r) {
                 let s = links.source[k] as usize;
-                directional[k] = nodes.is_cluster[s] && r != s && !is_near(nodes, r, s);
+                directional[k] = sends_directionally(nodes, r, s);
             }
         }
         let mut lobes =
@@ -135,8 +149,9 @@ impl Lobes {
         self.slot.get(n).copied().filter(|&s| s != NO_SLOT).map(|s| s as usize)
     }
 
-    /// What link `k` (receiver ← source) sends when it is far and its source a cluster: B̂_S(ω)
-    /// towards the receiver; `None` for other links (and where no member faces ω's lobes).
+    /// What link `k` (receiver ← source) sends when its source is a cluster and the two ends'
+    /// spheres are disjoint: B̂_S(ω) towards the receiver; `None` for other links (and where no
+    /// member faces ω's lobes).
     pub fn sent_over(&self, nodes: &Nodes, k: usize, receiver: usize, source: usize) -> Option<DVec3> {
         if !self.directional.get(k).copied().unwrap_or(false) {
             return None;
