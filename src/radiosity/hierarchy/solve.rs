@@ -26,9 +26,10 @@ pub struct SweepChange {
 /// the emission and reflected caustic light (`Nodes::source_exitance`);
 /// inner nodes: B = Σ_c A_c B_c / Σ_c A_c (after their children).
 ///
-/// `scales` are the links' `ArrivalScales`. Serial and in a fixed order, so the result does not
-/// depend on threads. Updates `exitance`, `exitance_mean` and `gathered` (own links only) of every
-/// node.
+/// `scales` are the links' `ArrivalScales`; `lobes` the clusters' directional exitance (`Lobes`),
+/// pulled with the exitance, which links from clusters to ends outside them send. Serial and in a
+/// fixed order, so the result does not depend on threads. Updates `exitance`, `exitance_mean` and
+/// `gathered` (own links only) of every node.
 pub fn sweep(
     nodes: &mut Nodes,
     links: &Links,
