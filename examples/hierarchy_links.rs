@@ -696,7 +696,7 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
         }
         receivers.sort_unstable();
         receivers.dedup();
-        let sampled: std::collections::HashMap<usize, (f64, f64)> = receivers
+        let sampled: std::collections::HashMap<usize, (f64, f64, f64, f64)> = receivers
             .par_iter()
             .flat_map_iter(|&a| {
                 links.range(a).filter_map(move |k| {
@@ -707,8 +707,11 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
             .collect::<Vec<_>>()
             .into_par_iter()
             .filter_map(|(k, a, s)| {
-                let b = sample_read(nodes, &ctx, a, s)?;
-                Some((k, (b, sample_read(nodes, &open_ctx, a, s).unwrap_or(b))))
+                let b = sample_read(nodes, &ctx, a, s, 0)?;
+                let open = sample_read(nodes, &open_ctx, a, s, 0).unwrap_or(b);
+                let cut4 = sample_read(nodes, &ctx, a, s, 2).unwrap_or(b);
+                let cut16 = sample_read(nodes, &ctx, a, s, 4).unwrap_or(b);
+                Some((k, (b, open, cut4, cut16)))
             })
             .collect();
         // By the kind of the link a transfer goes through (links) or would (rays: the link joining an
@@ -730,13 +733,13 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 1
             }
         };
-        let by_source_kind = std::sync::Mutex::new([[0.0f64; 3]; 6]);
+        let by_source_kind = std::sync::Mutex::new([[0.0f64; 5]; 6]);
         let rows: Vec<GatheredRow> = mine
             .par_iter()
             .map(|&e| {
                 let member = inputs.node[nodes.input[e] as usize] as usize;
                 let mut by_kind = [0.0f64; 5];
-                let mut per_source_kind = [[0.0f64; 3]; 6];
+                let mut per_source_kind = [[0.0f64; 5]; 6];
                 let up_e = ancestors_of(nodes, e);
                 let mut direct_by_kind = [0.0f64; 5];
                 let mut directional = 0.0f64;
@@ -792,6 +795,8 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                         let kind = link_kind(a, s);
                         per_source_kind[kind][0] += gain * t;
                         per_source_kind[kind][1] += gain * sampled.get(&k).map_or(t, |b| b.0 * links.form_factor[k] as f64);
+                        per_source_kind[kind][3] += gain * sampled.get(&k).map_or(t, |b| b.2 * links.form_factor[k] as f64);
+                        per_source_kind[kind][4] += gain * sampled.get(&k).map_or(t, |b| b.3 * links.form_factor[k] as f64);
                         // By source object: an element's own; a cluster's members by their share of
                         // the directional transfer.
                         if nodes.is_cluster[s] {
@@ -879,7 +884,7 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 {
                     let mut sums = by_source_kind.lock().unwrap();
                     for (kind, v) in per_source_kind.iter().enumerate() {
-                        for j in 0..3 {
+                        for j in 0..5 {
                             sums[kind][j] += open * v[j];
                         }
                     }
@@ -930,12 +935,15 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 100.0 * (read_open / rays - 1.0)
             );
         }
-        println!("  by the link's kind (links, links with sampled reads, rays through that kind of link):");
+        println!("  by the link's kind (links, links with sampled reads, the reads over a cut of the source, rays through that kind of link):");
         let kinds = by_source_kind.into_inner().unwrap();
         for (label, v) in
             ["element leaf", "element split", "far cluster", "near cluster", "self", "none"].iter().zip(kinds)
         {
-            println!("    {label:>13}: links {:.2} W, sampled reads {:.2} W, rays {:.2} W", v[0], v[1], v[2]);
+            println!(
+                "    {label:>13}: links {:.2} W, sampled reads {:.2} W (over a cut of 4: {:.2}, of 16: {:.2}), rays {:.2} W",
+                v[0], v[1], v[3], v[4], v[2]
+            );
         }
         let sums = by_object.into_inner().unwrap();
         let n = objects_all.len();
@@ -1502,15 +1510,18 @@ impl LeafTracer {
 type UnlinkedRow = (Vec<f64>, Vec<(usize, usize)>);
 
 /// The scene solved at its own parameters, or `None` with the error printed.
-/// The scene's surfaces fanned into triangles, for visibility and cosine rays.
 /// What near link (receiver ← source) reads of its cluster source through its own samples: Σ_k
 /// w_k B(t_k) / Σ_k w_k over the source elements the samples see (emission left out), leaf pair by
 /// leaf pair (w = A_r F(r ← s) V) where the link is integrated that way; `None` when nothing is seen.
+/// With `depth` > 0 each read counts for its ancestor `depth` levels below the source (a cut of at
+/// most 2^depth clusters or elements, what per-link weights over such a cut could keep) and reads
+/// that node's exitance.
 fn sample_read(
     nodes: &radray::radiosity::hierarchy::nodes::Nodes,
     ctx: &radray::radiosity::hierarchy::visibility::VisibilityContext,
     receiver: usize,
     source: usize,
+    depth: usize,
 ) -> Option<f64> {
     use radray::radiosity::hierarchy::links::{leaves_below, EXACT_NEAR_PAIRS};
     let mean = |v: DVec3| (v.x + v.y + v.z) / 3.0;
@@ -1531,12 +1542,30 @@ fn sample_read(
     } else {
         radray::radiosity::hierarchy::visibility::sampled_form_factor_reads(ctx, nodes, receiver, source, &mut reads);
     }
+    let cut = |t: usize| {
+        if depth == 0 {
+            return t;
+        }
+        let mut path = vec![t];
+        while *path.last().unwrap() != source {
+            path.push(nodes.parent[*path.last().unwrap()] as usize);
+        }
+        path[path.len().saturating_sub(1 + depth)]
+    };
     let total: f64 = reads.iter().map(|&(_, w)| w).sum();
     (total > 0.0).then(|| {
-        reads.iter().map(|&(t, w)| w * mean(nodes.exitance[t] - nodes.emission[t].as_dvec3())).sum::<f64>() / total
+        reads
+            .iter()
+            .map(|&(t, w)| {
+                let n = cut(t);
+                w * mean(nodes.exitance[n] - nodes.emission[n].as_dvec3())
+            })
+            .sum::<f64>()
+            / total
     })
 }
 
+/// The scene's surfaces fanned into triangles, for visibility and cosine rays.
 fn scene_accel(scene: &radray::scene::SceneDescription) -> radray::accel::Accel {
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     for s in &scene.surfaces {
