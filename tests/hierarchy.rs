@@ -1109,7 +1109,7 @@ fn near_link_leaf_pair_estimator_matches_polygon_to_polygon_cases() {
 /// The near-link sampled estimator (`visibility::sampled_form_factor`: Lambert's exact form factor
 /// from a receiver point to an area-picked source element, times a ray; used by
 /// `links::near_form_factor` above 64 leaf pairs) against every polygon-to-polygon case, with the
-/// default 8 visibility rays (32 samples, `NEAR_SAMPLES_PER_RAY`), averaged over 64 seeds: its bias must be within 4 standard errors of
+/// default 8 visibility rays (48 samples, `NEAR_SAMPLES_PER_RAY`), averaged over 64 seeds: its bias must be within 4 standard errors of
 /// that mean.
 ///
 /// Until session 15 it was ignored, biased low where the ends touch or nearly do (session 12: parallel
