@@ -469,7 +469,7 @@ pub fn towards_probability(nodes: &Nodes, node: usize, x: Vec3, element: usize) 
 /// and cornell_original seed 0 42%, for 0.94–1.23× the CPU time (the vault hall got cheaper: noisy
 /// deviations split fewer links needlessly); cornell seed 3 +8% and cornell_empty +30%, whose
 /// errors are a tenth of the rooms' (session 19, docs/accuracy.md). 6 × 8 (session 27): Sponza
-/// 0.0720 → 0.0616 in relMSE for +13% CPU-s, where 8 more visibility rays or a threshold of 3.5e-3
+/// 0.0720 → 0.0616 in relMSE for +13% CPU-s, where 12 visibility rays or a threshold of 3.5e-3
 /// cost +50% for −21%; the rooms within ±2.6%. Refinement reads the deviation, and its noise decides
 /// which near links are split: the same 32 samples with the deviation from their second half only
 /// gave Sponza 0.0850. 8 × 8: 0.0595 for +29%.
