@@ -21,7 +21,10 @@
 //! - `--gathered NAME...`: per leaf, the indirect irradiance the links push against cosine rays that
 //!   read the exitance of the leaf they hit (256 per leaf, emission left out of both): the same
 //!   exitance, so only the transfer and its spread over the members differ; by the leaves' normal
-//!   (facing down, sideways, up); `GATHERED_DETAIL` prints every leaf.
+//!   (facing down, sideways, up); `GATHERED_DETAIL` prints every leaf; `GATHERED_LINKS` lists the
+//!   near cluster links by the ray power through them (the 40 largest with their form factor, the
+//!   same estimate again, its facing samples and deviation, a 384-sample estimate with and without
+//!   occluders, the object's share of the receiver, and what lands against what rays bring).
 //! - `--coverage NAME`: for every leaf of NAME (receiver) and every 16th leaf of the scene (source),
 //!   how many links join an ancestor-or-self of the one to an ancestor-or-self of the other (one, or
 //!   none where they cannot exchange light, is right): the unoccluded pair transfer of the pairs with
@@ -734,6 +737,8 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
             }
         };
         let by_source_kind = std::sync::Mutex::new([[0.0f64; 5]; 6]);
+        // Per near-cluster link: (landed, rays) on this object's leaves, weighted by open area.
+        let per_link = std::sync::Mutex::new(std::collections::HashMap::<usize, (f64, f64)>::new());
         let rows: Vec<GatheredRow> = mine
             .par_iter()
             .map(|&e| {
@@ -746,6 +751,7 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 let mut read = 0.0f64;
                 let mut read_open = 0.0f64;
                 let mut per_object = vec![0.0f64; 2 * objects_all.len()];
+                let mut link_rows: Vec<(usize, f64, f64)> = Vec::new();
                 let mut up = e as u32;
                 while up != u32::MAX {
                     let a = up as usize;
@@ -793,6 +799,9 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                             * sampled.get(&k).map_or(t, |b| b.0 * links.form_factor[k] as f64);
                         read_open += gain * sampled.get(&k).map_or(t, |b| b.1 * links.form_factor[k] as f64);
                         let kind = link_kind(a, s);
+                        if kind == 3 {
+                            link_rows.push((k, gain * t, 0.0));
+                        }
                         per_source_kind[kind][0] += gain * t;
                         per_source_kind[kind][1] += gain * sampled.get(&k).map_or(t, |b| b.0 * links.form_factor[k] as f64);
                         per_source_kind[kind][3] += gain * sampled.get(&k).map_or(t, |b| b.2 * links.form_factor[k] as f64);
@@ -842,6 +851,16 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                                 })
                                 .unwrap_or(5);
                             per_source_kind[kind][2] += b / RAYS as f64;
+                            if kind == 3 {
+                                let pair = up_e.iter().find_map(|&a| {
+                                    up_l.iter().find(|&&c| set.contains(&(a, c))).map(|&c| (a as usize, c as usize))
+                                });
+                                if let Some((a, c)) = pair {
+                                    if let Some(k) = links.range(a).find(|&k| links.source[k] as usize == c) {
+                                        link_rows.push((k, 0.0, b / RAYS as f64));
+                                    }
+                                }
+                            }
                             per_object[objects_all.len() + object_of(l)] += b / RAYS as f64;
                         }
                         RayEnd::Behind => {}
@@ -881,6 +900,14 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                     1
                 };
                 let open = nodes.open_area[e] as f64;
+                {
+                    let mut m = per_link.lock().unwrap();
+                    for (k, landed, rays) in link_rows {
+                        let entry = m.entry(k).or_insert((0.0, 0.0));
+                        entry.0 += open * landed;
+                        entry.1 += open * rays;
+                    }
+                }
                 {
                     let mut sums = by_source_kind.lock().unwrap();
                     for (kind, v) in per_source_kind.iter().enumerate() {
@@ -934,6 +961,62 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 read_open,
                 100.0 * (read_open / rays - 1.0)
             );
+        }
+        if std::env::var("GATHERED_LINKS").is_ok() {
+            let per_link = per_link.into_inner().unwrap();
+            let mut order: Vec<(usize, (f64, f64))> = per_link.into_iter().collect();
+            order.sort_by(|a, b| b.1 .1.total_cmp(&a.1 .1));
+            let hi =
+                radray::radiosity::hierarchy::visibility::VisibilityContext { rays: 64, seed: ctx.seed ^ 0xabc, ..ctx };
+            let (mut landed_all, mut rays_all, mut scaled_all) = (0.0, 0.0, 0.0);
+            println!("  near cluster links, most ray power first: link r <- s, A_r, members of r and s, shares?, F (again, facing samples, deviation), F with 384 samples, unoccluded, object area under r / A_r, landed W, rays W");
+            for (rank, &(k, (landed, rays))) in order.iter().enumerate() {
+                landed_all += landed;
+                rays_all += rays;
+                if rank >= 40 {
+                    continue;
+                }
+                let r = order_receiver(links, k);
+                let s = links.source[k] as usize;
+                let f_hi = radray::radiosity::hierarchy::visibility::sampled_form_factor(&hi, nodes, r, s).form_factor;
+                let own = radray::radiosity::hierarchy::visibility::sampled_form_factor(&ctx, nodes, r, s);
+                let open_hi = radray::radiosity::hierarchy::visibility::sampled_form_factor(
+                    &radray::radiosity::hierarchy::visibility::VisibilityContext {
+                        rays: 64,
+                        seed: ctx.seed ^ 0xabc,
+                        ..open_ctx
+                    },
+                    nodes,
+                    r,
+                    s,
+                )
+                .form_factor;
+                scaled_all += landed * f_hi / (links.form_factor[k] as f64).max(1e-30);
+                let mut members = Vec::new();
+                nodes.members(r, &mut members);
+                let under: f64 =
+                    mine.iter().filter(|&&e| is_below(nodes, e, r)).map(|&e| nodes.open_area[e] as f64).sum();
+                let mut sm = Vec::new();
+                nodes.members(s, &mut sm);
+                let i = k - links.range(r).start;
+                println!(
+                    "    {r} <- {s}: A_r {:.1} members {} {} shares {} F {:.3e} (again: {:.3e}, facing {}, deviation {:.3e}) F_hi {:.5} unoccluded {:.5} share {:.3} landed {:.3} rays {:.3}",
+                    nodes.area[r],
+                    members.len(),
+                    sm.len(),
+                    scales.receiver(r).has_shares(i),
+                    links.form_factor[k],
+                    own.form_factor,
+                    own.facing,
+                    own.deviation,
+                    f_hi,
+                    open_hi,
+                    under / nodes.area[r] as f64,
+                    landed,
+                    rays
+                );
+            }
+            println!("  all near cluster links: landed {landed_all:.2} rays {rays_all:.2}; top 40 landed rescaled to F_hi: {scaled_all:.2}");
         }
         println!("  by the link's kind (links, links with sampled reads, the reads over a cut of the source, rays through that kind of link):");
         let kinds = by_source_kind.into_inner().unwrap();
@@ -1587,4 +1670,21 @@ fn solved(scene: &radray::scene::SceneDescription) -> Option<radray::radiosity::
             None
         }
     }
+}
+
+/// The receiver of link k.
+fn order_receiver(links: &radray::radiosity::hierarchy::links::Links, k: usize) -> usize {
+    links.offsets.partition_point(|&o| o as usize <= k) - 1
+}
+
+/// Whether node `n` is `a` or below it.
+fn is_below(nodes: &radray::radiosity::hierarchy::nodes::Nodes, n: usize, a: usize) -> bool {
+    let mut up = n as u32;
+    while up != u32::MAX {
+        if up as usize == a {
+            return true;
+        }
+        up = nodes.parent[up as usize];
+    }
+    false
 }
