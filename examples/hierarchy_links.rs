@@ -844,21 +844,15 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                             let b = mean(nodes.exitance[l] - nodes.emission[l].as_dvec3());
                             g += b;
                             let up_l = ancestors_of(nodes, l);
-                            let kind = up_e
-                                .iter()
-                                .find_map(|&a| {
-                                    up_l.iter().find(|&&c| set.contains(&(a, c))).map(|&c| link_kind(a as usize, c as usize))
-                                })
-                                .unwrap_or(5);
+                            // The link joining an ancestor-or-self of e to one of l, if any.
+                            let pair = up_e.iter().find_map(|&a| {
+                                up_l.iter().find(|&&c| set.contains(&(a, c))).map(|&c| (a as usize, c as usize))
+                            });
+                            let kind = pair.map_or(5, |(a, c)| link_kind(a, c));
                             per_source_kind[kind][2] += b / RAYS as f64;
-                            if kind == 3 {
-                                let pair = up_e.iter().find_map(|&a| {
-                                    up_l.iter().find(|&&c| set.contains(&(a, c))).map(|&c| (a as usize, c as usize))
-                                });
-                                if let Some((a, c)) = pair {
-                                    if let Some(k) = links.range(a).find(|&k| links.source[k] as usize == c) {
-                                        link_rows.push((k, 0.0, b / RAYS as f64));
-                                    }
+                            if let (3, Some((a, c))) = (kind, pair) {
+                                if let Some(k) = links.range(a).find(|&k| links.source[k] as usize == c) {
+                                    link_rows.push((k, 0.0, b / RAYS as f64));
                                 }
                             }
                             per_object[objects_all.len() + object_of(l)] += b / RAYS as f64;
@@ -976,7 +970,7 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 if rank >= 40 {
                     continue;
                 }
-                let r = order_receiver(links, k);
+                let r = receiver_of(links, k);
                 let s = links.source[k] as usize;
                 let f_hi = radray::radiosity::hierarchy::visibility::sampled_form_factor(&hi, nodes, r, s).form_factor;
                 let own = radray::radiosity::hierarchy::visibility::sampled_form_factor(&ctx, nodes, r, s);
@@ -994,8 +988,11 @@ fn gathered_by_normal(scene: &radray::scene::SceneDescription, objects: &[String
                 scaled_all += landed * f_hi / (links.form_factor[k] as f64).max(1e-30);
                 let mut members = Vec::new();
                 nodes.members(r, &mut members);
-                let under: f64 =
-                    mine.iter().filter(|&&e| is_below(nodes, e, r)).map(|&e| nodes.open_area[e] as f64).sum();
+                let under: f64 = mine
+                    .iter()
+                    .filter(|&&e| ancestors_of(nodes, e).contains(&(r as u32)))
+                    .map(|&e| nodes.open_area[e] as f64)
+                    .sum();
                 let mut sm = Vec::new();
                 nodes.members(s, &mut sm);
                 let i = k - links.range(r).start;
@@ -1673,18 +1670,6 @@ fn solved(scene: &radray::scene::SceneDescription) -> Option<radray::radiosity::
 }
 
 /// The receiver of link k.
-fn order_receiver(links: &radray::radiosity::hierarchy::links::Links, k: usize) -> usize {
+fn receiver_of(links: &radray::radiosity::hierarchy::links::Links, k: usize) -> usize {
     links.offsets.partition_point(|&o| o as usize <= k) - 1
-}
-
-/// Whether node `n` is `a` or below it.
-fn is_below(nodes: &radray::radiosity::hierarchy::nodes::Nodes, n: usize, a: usize) -> bool {
-    let mut up = n as u32;
-    while up != u32::MAX {
-        if up as usize == a {
-            return true;
-        }
-        up = nodes.parent[up as usize];
-    }
-    false
 }
