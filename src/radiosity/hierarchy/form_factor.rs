@@ -32,39 +32,53 @@ pub fn point_to_polygon(point: Vec3, normal: Vec3, polygon: &[Vec3]) -> f64 {
     point_to_source(point, normal, &Source::new(polygon))
 }
 
-/// A source polygon with its Newell normal, computed once for the many receiver points of an
+/// A source polygon in f64 with its Newell normal, made once for the many receiver points of an
 /// element link (`element_to_element`: 6 or 54 points) rather than once per point.
-pub struct Source<'a> {
-    polygon: &'a [Vec3],
+pub struct Source {
+    /// The vertices (the first `count`; at most 7 are read, as `clip_to_half_space` clips).
+    vertices: [DVec3; 7],
+    count: usize,
     newell: DVec3,
 }
 
-impl<'a> Source<'a> {
+impl Source {
     /// `polygon` (at least three vertices, counter-clockwise seen from its front).
-    pub fn new(polygon: &'a [Vec3]) -> Source<'a> {
-        Source { polygon, newell: newell_normal(polygon) }
+    pub fn new(polygon: &[Vec3]) -> Source {
+        let count = polygon.len().min(7);
+        let mut vertices = [DVec3::ZERO; 7];
+        for (v, p) in vertices.iter_mut().zip(polygon) {
+            *v = p.as_dvec3();
+        }
+        Source { vertices, count, newell: newell_normal(polygon) }
     }
 }
 
 /// `point_to_polygon` to a `Source` (the same value, bit for bit).
-fn point_to_source(point: Vec3, normal: Vec3, source: &Source) -> f64 {
-    let polygon = source.polygon;
+pub fn point_to_source(point: Vec3, normal: Vec3, source: &Source) -> f64 {
     let p = point.as_dvec3();
     let n = normal.as_dvec3();
     // One-sided source: its Newell normal must face the point.
-    let source_normal = source.newell;
-    if source_normal.dot(p - polygon[0].as_dvec3()) <= 0.0 {
+    if source.newell.dot(p - source.vertices[0]) <= 0.0 {
         return 0.0;
     }
-    let mut clipped = [DVec3::ZERO; 8];
-    let count = clip_to_half_space(polygon, p, n, &mut clipped);
-    if count < 3 {
-        return 0.0;
-    }
-    // R_i = v_i − p once per vertex (each is the end of two edges).
+    // R_i = v_i − p once per vertex (each is the end of two edges). A source wholly above the
+    // point's plane (the usual case) is its own clip (`clip_to_half_space` copies it as it is).
     let mut rays = [DVec3::ZERO; 8];
-    for (ray, vertex) in rays.iter_mut().zip(&clipped[..count]) {
+    let mut count = source.count;
+    let mut above = true;
+    for (ray, vertex) in rays.iter_mut().zip(&source.vertices[..count]) {
         *ray = *vertex - p;
+        above &= n.dot(*ray) >= 0.0;
+    }
+    if !above {
+        let mut clipped = [DVec3::ZERO; 8];
+        count = clip_to_half_space(&source.vertices[..count], p, n, &mut clipped);
+        if count < 3 {
+            return 0.0;
+        }
+        for (ray, vertex) in rays.iter_mut().zip(&clipped[..count]) {
+            *ray = *vertex - p;
+        }
     }
     let mut sum = 0.0;
     for i in 0..count {
@@ -84,8 +98,9 @@ fn point_to_source(point: Vec3, normal: Vec3, source: &Source) -> f64 {
 /// `polygon` (at most 7 vertices, convex) clipped to the half-space n·(x − p) ≥ 0 above the plane
 /// of `point` and `normal`; empty when less than a polygon remains (Sutherland–Hodgman).
 pub fn clip_above(polygon: &[Vec3], point: Vec3, normal: Vec3) -> Vec<Vec3> {
+    let source = Source::new(polygon);
     let mut clipped = [DVec3::ZERO; 8];
-    let count = clip_to_half_space(polygon, point.as_dvec3(), normal.as_dvec3(), &mut clipped);
+    let count = clip_to_half_space(&source.vertices[..source.count], point.as_dvec3(), normal.as_dvec3(), &mut clipped);
     if count < 3 {
         return Vec::new();
     }
@@ -112,16 +127,14 @@ fn newell_normal(polygon: &[Vec3]) -> DVec3 {
     n
 }
 
-/// Sutherland–Hodgman clip of `polygon` (at most 7 vertices) to n·(x − p) ≥ 0; writes the clipped
+/// Sutherland–Hodgman clip of `vertices` (at most 7) to n·(x − p) ≥ 0; writes the clipped
 /// polygon into `out` and returns its vertex count. Each vertex's height n·(v − p) is computed once;
 /// a polygon wholly in the half-space (the usual case) is copied as it is, which is what the clip
 /// loop would write.
-fn clip_to_half_space(polygon: &[Vec3], p: DVec3, n: DVec3, out: &mut [DVec3; 8]) -> usize {
-    let m = polygon.len().min(7);
-    let mut vertices = [DVec3::ZERO; 7];
+fn clip_to_half_space(vertices: &[DVec3], p: DVec3, n: DVec3, out: &mut [DVec3; 8]) -> usize {
+    let m = vertices.len().min(7);
     let mut heights = [0.0f64; 7];
     for i in 0..m {
-        vertices[i] = polygon[i].as_dvec3();
         heights[i] = n.dot(vertices[i] - p);
     }
     if heights[..m].iter().all(|&h| h >= 0.0) {

@@ -31,7 +31,7 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use super::form_factor::{point_to_polygon, quadrature_points};
+use super::form_factor::{point_to_polygon, point_to_source, quadrature_points, Source};
 use super::links::Links;
 use super::nodes::Nodes;
 
@@ -86,7 +86,8 @@ pub fn child_weights(nodes: &Nodes, receiver: usize, source: usize) -> [u8; 4] {
         let mut points = [Vec3::ZERO; 12];
         let points = receiver_points(corners, is_near_pair(corners, &nodes.corners[source]), &mut points);
         for (fk, p) in f.iter_mut().zip(children) {
-            *fk = points.iter().map(|&x| point_to_polygon(x, normal, &nodes.corners[p])).sum();
+            let child = Source::new(&nodes.corners[p]);
+            *fk = points.iter().map(|&x| point_to_source(x, normal, &child)).sum();
         }
     }
     for (fk, p) in f.iter_mut().zip(children) {
