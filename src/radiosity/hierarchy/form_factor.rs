@@ -82,17 +82,90 @@ pub fn point_to_source(point: Vec3, normal: Vec3, source: &Source) -> f64 {
     }
     let mut sum = 0.0;
     for i in 0..count {
-        let a = rays[i];
-        let b = rays[if i + 1 == count { 0 } else { i + 1 }];
-        let cross = a.cross(b);
-        let len = cross.length();
-        if len <= 0.0 {
-            continue;
-        }
-        let gamma = edge_angle_rad(len, a.dot(b));
-        sum += gamma * n.dot(cross) / len;
+        sum += edge_term(rays[i], rays[if i + 1 == count { 0 } else { i + 1 }], n);
     }
+    lambert_value(sum)
+}
+
+/// One edge's term of Lambert's sum, γ · n · (a × b) / |a × b| with γ = ∠(a, b), for the rays a, b
+/// from the point to the edge's ends; 0 for a degenerate edge (|a × b| = 0). Reversing the edge
+/// negates it exactly (a × b and b × a are exact negatives in floating point, a · b = b · a), which
+/// `point_to_quarters` relies on.
+#[inline]
+fn edge_term(a: DVec3, b: DVec3, n: DVec3) -> f64 {
+    let cross = a.cross(b);
+    let len = cross.length();
+    if len <= 0.0 {
+        return 0.0;
+    }
+    edge_angle_rad(len, a.dot(b)) * n.dot(cross) / len
+}
+
+/// F = |Σ edge terms| / 2π, at most 1.
+#[inline]
+fn lambert_value(sum: f64) -> f64 {
     (sum.abs() / (2.0 * std::f64::consts::PI)).min(1.0)
+}
+
+/// The four midpoint quarters of a source triangle (`nodes::quarters`: [a, ab, ca], [ab, b, bc],
+/// [ca, bc, c], [ab, bc, ca]) for `point_to_quarters`: their six distinct vertices in f64 and each
+/// quarter as a `Source`.
+pub struct Quarters {
+    /// a, b, c, ab, bc, ca.
+    vertices: [DVec3; 6],
+    quarters: [Source; 4],
+}
+
+impl Quarters {
+    /// `None` unless the four triangles are the quarters of one triangle in `nodes::quarters`'
+    /// order, their shared corners equal bit for bit.
+    pub fn new(quarters: &[[Vec3; 3]; 4]) -> Option<Quarters> {
+        let [[a, ab, ca], [ab1, b, bc], [ca2, bc2, c], [ab3, bc3, ca3]] = *quarters;
+        let shared = ab1 == ab && ab3 == ab && bc2 == bc && bc3 == bc && ca2 == ca && ca3 == ca;
+        shared.then(|| Quarters {
+            vertices: [a, b, c, ab, bc, ca].map(|v| v.as_dvec3()),
+            quarters: quarters.each_ref().map(|q| Source::new(q)),
+        })
+    }
+}
+
+/// `point_to_source` from one point to each of four quarters, the same values bit for bit, with the
+/// nine distinct edges' terms computed once: the six half-edges of the outline each belong to one
+/// corner quarter, and each of the three inner edges to a corner quarter and, reversed (its term
+/// negated exactly, `edge_term`), to the middle one. A point that sees a quarter's vertex below its
+/// plane takes the clipping path of `point_to_source` for every quarter. Serves the source weights
+/// of a link (`source_weights::child_weights`), which read a subdivided source's four children at
+/// up to 12 receiver points.
+pub fn point_to_quarters(point: Vec3, normal: Vec3, quarters: &Quarters) -> [f64; 4] {
+    let p = point.as_dvec3();
+    let n = normal.as_dvec3();
+    let mut rays = [DVec3::ZERO; 6];
+    let mut above = true;
+    for (ray, vertex) in rays.iter_mut().zip(&quarters.vertices) {
+        *ray = *vertex - p;
+        above &= n.dot(*ray) >= 0.0;
+    }
+    if !above {
+        return quarters.quarters.each_ref().map(|q| point_to_source(point, normal, q));
+    }
+    // Vertex indices: a 0, b 1, c 2, ab 3, bc 4, ca 5.
+    let t = |i: usize, j: usize| edge_term(rays[i], rays[j], n);
+    let (a_ab, ab_b, b_bc, bc_c, c_ca, ca_a) = (t(0, 3), t(3, 1), t(1, 4), t(4, 2), t(2, 5), t(5, 0));
+    let (ab_ca, bc_ab, ca_bc) = (t(3, 5), t(4, 3), t(5, 4));
+    let sums = [
+        0.0 + a_ab + ab_ca + ca_a,
+        0.0 + ab_b + b_bc + bc_ab,
+        0.0 + ca_bc + bc_c + c_ca,
+        0.0 + -bc_ab + -ca_bc + -ab_ca,
+    ];
+    let mut out = [0.0; 4];
+    for ((value, sum), quarter) in out.iter_mut().zip(sums).zip(&quarters.quarters) {
+        // One-sided, as in `point_to_source`: each quarter's own Newell normal must face the point.
+        if quarter.newell.dot(p - quarter.vertices[0]) > 0.0 {
+            *value = lambert_value(sum);
+        }
+    }
+    out
 }
 
 /// `polygon` (at most 7 vertices, convex) clipped to the half-space n·(x − p) ≥ 0 above the plane
@@ -313,6 +386,42 @@ mod tests {
         // Same square with its front facing up (+z): the point below sees its back.
         let sq = [vec3(-0.5, -0.5, 1.0), vec3(0.5, -0.5, 1.0), vec3(0.5, 0.5, 1.0), vec3(-0.5, 0.5, 1.0)];
         assert_eq!(point_to_polygon(Vec3::ZERO, Vec3::Z, &sq), 0.0);
+    }
+
+    #[test]
+    fn the_quarters_at_once_give_each_quarter_bit_for_bit() {
+        // Points above, straddling, in the plane of and behind a source triangle, with normals
+        // facing it, grazing it and turned away: every path (shared edges, clipping, one-sided).
+        let sources = [
+            [vec3(0.0, 2.0, 0.0), vec3(1.3, 2.1, 0.2), vec3(0.1, 2.4, 1.7)],
+            [vec3(0.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, 0.0, 1.0)],
+            [vec3(5.0, -1.0, 3.0), vec3(-2.0, 0.5, 3.5), vec3(0.3, 4.0, 2.0)],
+        ];
+        let normals = [Vec3::Y, Vec3::new(0.3, 0.9, -0.2).normalize(), Vec3::X, -Vec3::Y, Vec3::Z];
+        let mut compared = 0;
+        for source in &sources {
+            let parts = crate::radiosity::hierarchy::nodes::quarters(source);
+            let quarters = Quarters::new(&parts).expect("the quarters of one triangle");
+            let singles = parts.each_ref().map(|q| Source::new(q));
+            for i in 0..9 {
+                for j in 0..9 {
+                    for k in 0..5 {
+                        let point = vec3(i as f32 * 0.4 - 1.0, k as f32 * 0.6 - 0.5, j as f32 * 0.4 - 1.0);
+                        for &normal in &normals {
+                            let together = point_to_quarters(point, normal, &quarters);
+                            let one_by_one = singles.each_ref().map(|q| point_to_source(point, normal, q));
+                            assert_eq!(together.map(f64::to_bits), one_by_one.map(f64::to_bits), "{point} {normal}");
+                            compared += together.iter().filter(|&&f| f > 0.0).count();
+                        }
+                    }
+                }
+            }
+        }
+        assert!(compared > 1000, "only {compared} nonzero values compared");
+        // Four triangles that are not one triangle's quarters are refused.
+        let mut parts = crate::radiosity::hierarchy::nodes::quarters(&sources[0]);
+        parts[3][1].x += 1e-3;
+        assert!(Quarters::new(&parts).is_none());
     }
 
     #[test]

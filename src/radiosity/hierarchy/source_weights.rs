@@ -19,7 +19,8 @@
 //! A_R·F_RS·B̂_S, which push-pull conserves as before.
 //!
 //! F(R → S_k) by Lambert's exact `point_to_polygon` in the source, over receiver points
-//! (`receiver_points`: the centroid of a far element receiver, 12 points of a near one); for a
+//! (`receiver_points`: the centroid of a far element receiver, 12 points of a near one; all four
+//! children at once by `form_factor::point_to_quarters`, which shares their edges); for a
 //! cluster receiver from its centre, turned towards the source's centre. Visibility is the link's,
 //! shared by the children.
 //!
@@ -31,7 +32,7 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use super::form_factor::{point_to_polygon, point_to_source, quadrature_points, Source};
+use super::form_factor::{point_to_polygon, point_to_quarters, point_to_source, quadrature_points, Quarters, Source};
 use super::links::Links;
 use super::nodes::Nodes;
 
@@ -85,9 +86,22 @@ pub fn child_weights(nodes: &Nodes, receiver: usize, source: usize) -> [u8; 4] {
         let (corners, normal) = (&nodes.corners[receiver], nodes.normal[receiver]);
         let mut points = [Vec3::ZERO; 12];
         let points = receiver_points(corners, is_near_pair(corners, &nodes.corners[source]), &mut points);
-        for (fk, p) in f.iter_mut().zip(children) {
-            let child = Source::new(&nodes.corners[p]);
-            *fk = points.iter().map(|&x| point_to_source(x, normal, &child)).sum();
+        let corners_of = children.map(|p| nodes.corners[p]);
+        match Quarters::new(&corners_of) {
+            Some(quarters) => {
+                // Σ over the points in the same order as one child at a time.
+                for &x in points {
+                    for (fk, value) in f.iter_mut().zip(point_to_quarters(x, normal, &quarters)) {
+                        *fk += value;
+                    }
+                }
+            }
+            None => {
+                for (fk, corners) in f.iter_mut().zip(&corners_of) {
+                    let child = Source::new(corners);
+                    *fk = points.iter().map(|&x| point_to_source(x, normal, &child)).sum();
+                }
+            }
         }
     }
     for (fk, p) in f.iter_mut().zip(children) {
