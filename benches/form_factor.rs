@@ -1,11 +1,14 @@
 //! Criterion bench of the hierarchy's element form-factor kernels (`radiosity::hierarchy::form_factor`),
 //! which take a quarter to a half of a hierarchical solve's CPU (docs/performance.md): Lambert's
-//! point-to-polygon form factor, the six-point rule of a far element pair and the 48-point rule of
-//! a pair that shares an edge.
+//! point-to-polygon form factor, the six-point rule of a far element pair, the 48-point rule of a
+//! pair that shares an edge, and a subdivided source's four children seen from one point.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{vec3, Vec3};
-use radray::radiosity::hierarchy::form_factor::{element_six_points, near_quadrature, point_to_polygon};
+use radray::radiosity::hierarchy::form_factor::{
+    element_six_points, near_quadrature, point_to_polygon, point_to_quarters, point_to_source, Quarters, Source,
+};
+use radray::radiosity::hierarchy::nodes::quarters;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
@@ -26,6 +29,18 @@ fn bench(c: &mut Criterion) {
     });
     group.bench_function("near_quadrature_shared_edge", |b| {
         b.iter(|| near_quadrature(black_box(&floor), Vec3::Y, black_box(&wall)))
+    });
+    // A subdivided source's four children read from one receiver point, one at a time and at once
+    // (`source_weights::child_weights`).
+    let parts = quarters(&ceiling);
+    let singles = parts.each_ref().map(|q| Source::new(q));
+    let together = Quarters::new(&parts).expect("one triangle's quarters");
+    let point = vec3(0.3, 0.0, 0.3);
+    group.bench_function("four_children_one_at_a_time", |b| {
+        b.iter(|| singles.each_ref().map(|q| point_to_source(black_box(point), Vec3::Y, q)))
+    });
+    group.bench_function("four_children_at_once", |b| {
+        b.iter(|| point_to_quarters(black_box(point), Vec3::Y, black_box(&together)))
     });
     group.finish();
 }
