@@ -160,8 +160,9 @@ pub fn point_to_quarters(point: Vec3, normal: Vec3, quarters: &Quarters) -> [f64
     ];
     let mut out = [0.0; 4];
     for ((value, sum), quarter) in out.iter_mut().zip(sums).zip(&quarters.quarters) {
-        // One-sided, as in `point_to_source`: each quarter's own Newell normal must face the point.
-        if quarter.newell.dot(p - quarter.vertices[0]) > 0.0 {
+        // One-sided, as in `point_to_source` (whose test this is, NaN included): each quarter's own
+        // Newell normal must face the point.
+        if !(quarter.newell.dot(p - quarter.vertices[0]) <= 0.0) {
             *value = lambert_value(sum);
         }
     }
