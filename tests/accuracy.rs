@@ -85,7 +85,7 @@ fn furnace_is_two_everywhere_in_both_modes() {
     // So is the gather's second bounce off, for the same reason: its shadow rays at near hits see the
     // emitting walls next to them (tests/final_gather.rs checks its mean in the furnace).
     scene.render.direct = DirectMode::Radiosity;
-    scene.render.near_bounce = 0.0;
+    scene.render.near_bounce = Some(0.0);
     for image in render(&scene, &[TraceMode::Radiosity, TraceMode::Final]) {
         // Exact: L = Ke/(1 − Kd) = 2 everywhere. 1 % is the bound; the hemicube's row sums are
         // within ~1e-3 of one, amplified by 1/(1 − ρ) = 2.
@@ -141,7 +141,7 @@ fn cornell_boxes_with_per_pixel_direct_light_match_the_path_tracer_at_256_spp() 
 fn specular_metrics(hemicube_resolution_px: u32) -> (Image, compare::Metrics, compare::Metrics) {
     let mut s = load("cornell_specular.toml");
     s.render.direct = DirectMode::Pixel;
-    s.render.near_bounce = 0.0;
+    s.render.near_bounce = Some(0.0);
     s.image.adaptive_error = None;
     s.radiosity.hemicube_resolution_px = hemicube_resolution_px;
     let mut images = render(&s, &[TraceMode::Final, TraceMode::Radiosity]);

@@ -133,7 +133,7 @@ fn a_tessellated_sphere_shades_smoothly_across_its_facet_edges() {
         let exitance = (0..e.len()).map(|i| if floor(i) { Vec3::ONE } else { e.emission[i] }).collect();
         (exitance, vec![Vec3::ZERO; e.len()])
     });
-    let params = RenderParams { direct: DirectMode::Pixel, near_bounce: 0.0, ..RenderParams::default() };
+    let params = RenderParams { direct: DirectMode::Pixel, near_bounce: Some(0.0), ..RenderParams::default() };
     let flat = setup.tracer_with(&params);
     let smooth = setup.tracer_with(&params).with_shading_normals(&scene.surfaces);
     let mut figures = String::new();
@@ -308,8 +308,12 @@ fn a_furnace_with_a_smooth_sphere_inside_stays_exact() {
     // cells below a facet's plane count as dark and the estimate is divided by the lobe's share
     // above it, so only the cells the plane cuts vary (a few of 256). 0.5%, half the shipped furnace's
     // tolerance (whose 1% covers the hemicube's row sums, which the hand-made solution does not have).
-    scene.render =
-        RenderParams { direct: DirectMode::Radiosity, near_bounce: 0.0, gather_rays: 256, ..RenderParams::default() };
+    scene.render = RenderParams {
+        direct: DirectMode::Radiosity,
+        near_bounce: Some(0.0),
+        gather_rays: 256,
+        ..RenderParams::default()
+    };
     let mut stats = RunStats::default();
     let image = run::render(
         &scene,

@@ -372,10 +372,11 @@ pub struct RenderParams {
     pub cache_accuracy: f32,
     /// The gather's second bounce: a gather ray's hit closer than this many of the hit element's
     /// sizes (√area) has its exitance estimated at the point (`trace::gather::near`) instead of
-    /// interpolated; 0 turns it off, infinity applies it everywhere.
-    pub near_bounce: f32,
-    /// Rays of the secondary gather at a near hit.
-    pub near_bounce_rays: u32,
+    /// interpolated; 0 turns it off, infinity applies it everywhere. `None` (the scene leaves
+    /// `near_bounce` unset): by the solution pass two reads (`RenderParams::near_bounce_for`).
+    pub near_bounce: Option<f32>,
+    /// Rays of the secondary gather at a near hit; `None`: by the solution, as `near_bounce`.
+    pub near_bounce_rays: Option<u32>,
     /// A cache record whose pilot gather predicts a relative standard error above this gathers
     /// `REFINE_FACTOR` × `gather_rays` (`trace::gather::refine`); 0 keeps every record at `gather_rays`.
     pub gather_refine_error: f32,
@@ -393,6 +394,35 @@ pub struct RenderParams {
 /// door jamb came out 5% too bright, the wall beside the back corner 2%; 2.5 re-estimates those hits
 /// at the point (docs/accuracy.md, "gap_room against a converged reference").
 pub const DEFAULT_NEAR_BOUNCE: f32 = 2.5;
+
+/// `near_bounce` by default on a hierarchical solution: every gather ray's hit gets the second
+/// bounce. The hierarchy's indirect light is short on large interiors (its links cover less of a
+/// leaf's hemisphere than rays do: Sponza's row sums 0.57 against 0.87, docs/accuracy.md sessions
+/// 24–30), and a gather that reads it at the first bounce carries that deficit into the final image;
+/// re-estimated at every hit it enters one bounce later, damped by ρ. Sponza (untextured capped
+/// copy, 320×180, one solution, `HIERARCHY_NEAR_BOUNCE_RAYS`, `HIERARCHY_SHADOW_FACTOR`): final
+/// relMSE 0.0154 → 0.0109, median pixel ratio to the reference 0.872 → 0.940, pass two 160 → 295
+/// CPU-s; vault_hall (40k triangles) 0.000422 → 0.000321, pass two 14.8 → 23.4 CPU-s
+/// (docs/accuracy.md, session 31). The uniform and
+/// adaptive meshes keep `DEFAULT_NEAR_BOUNCE`: their solutions carry no such bias, only their
+/// elements' corner bias, and every hit there cost 2.7–3.5× the time for no gain (session 5).
+pub const HIERARCHY_NEAR_BOUNCE: f32 = f32::INFINITY;
+
+/// Over a hierarchical solution, by default, re-estimated gather hits closer than this many element
+/// sizes take their direct light from a shadow ray (session 5's near rule); the others read the
+/// solution's direct part, which the hierarchy gets right (its deficit is in the indirect light).
+/// Sponza's final image, one solution: shadow rays at every hit 0.0110 in 347 CPU-s of pass two,
+/// within 2.5 sizes 0.0109 in 295, none 0.0111 in 271 (docs/accuracy.md, session 31).
+pub const HIERARCHY_SHADOW_FACTOR: f32 = DEFAULT_NEAR_BOUNCE;
+
+/// `near_bounce_rays` by default on the uniform and adaptive meshes.
+pub const DEFAULT_NEAR_BOUNCE_RAYS: u32 = 2;
+
+/// `near_bounce_rays` by default on a hierarchical solution: one. Every hit of a gather bounces, so
+/// its 1,024 cells average the secondary estimates: Sponza's final image 0.0110 with one ray against
+/// 0.0111 with two (shadow rays at every hit), pass two 347 against 487 CPU-s (docs/accuracy.md,
+/// session 31).
+pub const HIERARCHY_NEAR_BOUNCE_RAYS: u32 = 1;
 
 /// `gather_refine_error` by default. On gap_room (default preset, 256², seeds 1–4, relMSE against
 /// the converged image) off gives mean 0.00056 (0.00061 at worst); 0.04 refines 30% of the records
@@ -413,6 +443,45 @@ pub const DEFAULT_CACHE_ACCURACY: f32 = 0.25;
 /// stratified pattern of spp·N points gains more than 1/N) for +6% CPU-s of the whole render.
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 8;
 
+/// The gather's second bounce a render uses (`RenderParams::near_bounce_for`, `trace::gather::near`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GatherBounce {
+    /// Hits closer than this many element sizes (√area) are re-estimated at the point; 0: none.
+    pub distance_factor: f32,
+    /// Of those, hits closer than this many element sizes take their direct light from a shadow ray,
+    /// the others the solution's direct part.
+    pub shadow_factor: f32,
+    /// Rays of the secondary gather at a re-estimated hit.
+    pub rays: u32,
+}
+
+impl RenderParams {
+    /// The gather's second bounce for a solution that is hierarchical or not: the scene's
+    /// `near_bounce` and `near_bounce_rays` where it sets them (every re-estimated hit then takes a
+    /// shadow ray, as before session 31); else on a hierarchical solution every hit
+    /// (`HIERARCHY_NEAR_BOUNCE`) with `HIERARCHY_NEAR_BOUNCE_RAYS`, shadow rays within
+    /// `DEFAULT_NEAR_BOUNCE`; on the uniform and adaptive meshes `DEFAULT_NEAR_BOUNCE` with
+    /// `DEFAULT_NEAR_BOUNCE_RAYS`.
+    pub fn near_bounce_for(&self, hierarchical_solution: bool) -> GatherBounce {
+        let (factor, rays) = if hierarchical_solution {
+            (HIERARCHY_NEAR_BOUNCE, HIERARCHY_NEAR_BOUNCE_RAYS)
+        } else {
+            (DEFAULT_NEAR_BOUNCE, DEFAULT_NEAR_BOUNCE_RAYS)
+        };
+        let distance_factor = self.near_bounce.unwrap_or(factor);
+        let shadow_factor = match (self.near_bounce, hierarchical_solution) {
+            (Some(_), _) => distance_factor,
+            (None, true) => HIERARCHY_SHADOW_FACTOR,
+            (None, false) => DEFAULT_NEAR_BOUNCE,
+        };
+        GatherBounce {
+            distance_factor,
+            shadow_factor: shadow_factor.min(distance_factor),
+            rays: self.near_bounce_rays.unwrap_or(rays),
+        }
+    }
+}
+
 impl Default for RenderParams {
     fn default() -> Self {
         RenderParams {
@@ -420,8 +489,8 @@ impl Default for RenderParams {
             final_gather: FinalGatherMode::On,
             gather_rays: 1024,
             cache_accuracy: DEFAULT_CACHE_ACCURACY,
-            near_bounce: DEFAULT_NEAR_BOUNCE,
-            near_bounce_rays: 2,
+            near_bounce: None,
+            near_bounce_rays: None,
             gather_refine_error: DEFAULT_GATHER_REFINE_ERROR,
             light_samples: DEFAULT_LIGHT_SAMPLES,
             max_depth: 8,

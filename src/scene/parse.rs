@@ -616,9 +616,12 @@ fn render_params(loc: &Locator, raw: Option<&RawRender>, base: RenderParams) -> 
     if let Some(k) =
         loc.ranged(&r.near_bounce, "near_bounce", |x| x >= 0.0, "a non-negative number of element sizes")?
     {
-        p.near_bounce = k;
+        p.near_bounce = Some(k);
     }
-    p.near_bounce_rays = loc.positive_int(&r.near_bounce_rays, "near_bounce_rays", 1, 256, p.near_bounce_rays)?;
+    if r.near_bounce_rays.is_some() {
+        let rays = loc.positive_int(&r.near_bounce_rays, "near_bounce_rays", 1, 256, DEFAULT_NEAR_BOUNCE_RAYS)?;
+        p.near_bounce_rays = Some(rays);
+    }
     if let Some(e) =
         loc.ranged(&r.gather_refine_error, "gather_refine_error", |x| x >= 0.0, "a non-negative relative error")?
     {

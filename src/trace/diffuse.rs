@@ -102,6 +102,12 @@ impl<'a> Diffuse<'a> {
         hit.interpolate(&self.solution.vertex_exitance)
     }
 
+    /// The solution's direct part B_direct(p) at the hit (first-bounce exitance, emission excluded),
+    /// interpolated as `radiosity_at`.
+    pub fn direct_exitance_at(&self, hit: &SurfaceHit) -> Vec3 {
+        hit.interpolate(&self.solution.vertex_direct_exitance)
+    }
+
     /// Diffuse radiance towards the eye at a hit on element `element` of reflectance ρ (the texel
     /// albedo ρ(x) on a textured surface), given its exitance B(p) (`radiosity_at`), the direct
     /// irradiance E_direct from shadow rays (used by `PixelDirect` only) with the gathered indirect

@@ -110,7 +110,7 @@ pub struct Tracer<'a> {
     pixel_angle_rad: f32,
     /// The final gather that replaces the interpolated indirect light (`with_final_gather`).
     gather: Option<FinalGather>,
-    /// The gather's second bounce at near hits (`RenderParams::near_bounce`; `None` when 0).
+    /// The gather's second bounce at near hits (`RenderParams::near_bounce_for`; `None` when 0).
     near_bounce: Option<NearBounce>,
 }
 
@@ -163,8 +163,11 @@ impl<'a> Tracer<'a> {
             scale,
             pixel_angle_rad: 0.0,
             gather: None,
-            near_bounce: (params.near_bounce > 0.0)
-                .then(|| NearBounce::new(params.near_bounce, params.near_bounce_rays)),
+            near_bounce: Some(params.near_bounce_for(solution.leaf_geometry.is_some()))
+                .filter(|bounce| bounce.distance_factor > 0.0)
+                .map(|bounce| {
+                    NearBounce::new(bounce.distance_factor, bounce.rays).with_shadow_factor(bounce.shadow_factor)
+                }),
         })
     }
 

@@ -114,7 +114,7 @@ impl Tracer<'_> {
             if let Some(element) = hit.element.map(|e| e as usize) {
                 let reflected = match near {
                     Some(near) if ray.depth == 0 && near.applies(distance, elements.area[element]) => {
-                        self.near_exitance(&hit, element, near, sampler, counts)
+                        self.near_exitance(&hit, element, near, distance, sampler, counts)
                     }
                     _ => {
                         let exitance = self.diffuse().radiosity_at(&hit);
