@@ -59,6 +59,11 @@ impl EmitterPolygon {
         Some(EmitterPolygon { corners, fan_cumulative_area, area: hull_area as f32, locator })
     }
 
+    /// Corners of the convex hull, in order around it.
+    pub fn corners(&self) -> &[Vec3] {
+        &self.corners
+    }
+
     /// Area A of the polygon (scene units²).
     pub fn area(&self) -> f32 {
         self.area
@@ -218,11 +223,19 @@ impl TriangleLocator {
             let w2 = (b - a).perp_dot(q - a) / area;
             (1.0 - w1 - w2).min(w1).min(w2)
         };
-        candidates
-            .iter()
-            .map(|&t| (t as usize, inside(&self.triangles[t as usize])))
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-            .map_or(0, |(t, _)| t)
+        // A candidate that holds q strictly inside is the one (the triangles tile without overlap);
+        // else, for q on an edge or rounded just outside, the nearest by its smallest coordinate.
+        let mut best = (0, f32::NEG_INFINITY);
+        for &t in candidates {
+            let w = inside(&self.triangles[t as usize]);
+            if w > 0.0 {
+                return t as usize;
+            }
+            if w > best.1 {
+                best = (t as usize, w);
+            }
+        }
+        best.0
     }
 }
 
