@@ -246,11 +246,12 @@ pub fn mesh_of(scene: &SceneDescription, solution: &Solution, textures: Arc<Scen
 }
 
 /// The direct part of each element's exitance, B_d,i = ρ_i·E_d(x_i), with the direct irradiance at
-/// its centre x_i estimated from `samples` shadow rays to points stratified over the emitters' area:
+/// its centre x_i estimated from `samples` shadow rays to points y_k stratified over the emitters
+/// (`Emitters::sample_from`: by power and area, by solid angle on an emitter close to x_i):
 ///
-/// E_d(x) ≈ (A/K) Σ_k E_k cos θ_x cos θ_k / (π d_k²) · V(x, y_k)
+/// E_d(x) ≈ (1/K) Σ_k E_k cos θ_x cos θ_k / (π d_k² p_A(y_k)) · V(x, y_k)
 ///
-/// (E_k the emitted exitance of the side of the emitter facing x, A the emitters' total area). Each
+/// (E_k the emitted exitance of the side of the emitter facing x). Each
 /// element has its own random stream, so the result does not depend on the thread count.
 pub fn sampled_direct_exitance(
     mesh: &Mesh,
@@ -282,7 +283,7 @@ pub fn sampled_direct_exitance(
             let mut irradiance = DVec3::ZERO;
             for k in 0..samples {
                 let xi = (k as f32 + rng.next_f32()) / samples as f32;
-                let Some(sample) = emitters.sample(mesh, xi, rng.next_f32()) else { break };
+                let Some(sample) = emitters.sample_from(mesh, origin, xi, rng.next_f32()) else { break };
                 let to_light = sample.point - origin;
                 let dist2 = to_light.length_squared();
                 if !(dist2 > 0.0) {

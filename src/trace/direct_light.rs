@@ -95,7 +95,8 @@ impl<'a> DirectLight<'a> {
     /// `Vec3` for a flat point, else geometric and smooth shading normals), with N =
     /// `samples` shadow rays (the tracer passes [`DirectLight::light_samples`]; a final gather's
     /// near bounce its own count) to points x_k drawn on the emitters with area density p_A(x_k)
-    /// (triangle by power, then uniform on it; `Emitters::sample`) from one `Sampler::pattern_2d`:
+    /// (polygon by power, then uniform on it, or uniform in its solid angle from p when p is close
+    /// to it; `Emitters::sample_from`) from one `Sampler::pattern_2d`:
     ///
     /// E ≈ (1/N) Σ_k V(p, x_k) L_e(x_k) cos θ_k cos θ'_k / (r_k² p_A(x_k)),
     ///
@@ -133,7 +134,7 @@ impl<'a> DirectLight<'a> {
         let pattern = sampler.pattern_2d(samples);
         for k in 0..samples {
             let [xi, r] = sampler.point_2d(&pattern, k);
-            let Some(sample) = self.emitters.sample(mesh, xi, r) else {
+            let Some(sample) = self.emitters.sample_from(mesh, origin, xi, r) else {
                 break;
             };
             let to_light = sample.point - origin;
@@ -214,7 +215,8 @@ impl<'a> DirectLight<'a> {
             if p_lobe <= 0.0 {
                 continue;
             }
-            let p_light = self.emitters.area_density(hit.triangle) * dist * dist / cos_light;
+            let p_light =
+                self.emitters.area_density_from(hit.triangle, origin, origin + w * dist) * dist * dist / cos_light;
             let weight = power_heuristic(count, p_lobe, count, p_light);
             // L_e cos θ cosⁿα / p_B = L_e cos θ · 2π/(n + 1).
             sum += emitted_radiance * (cos_here * 2.0 * PI / (exponent + 1.0) * weight / count);

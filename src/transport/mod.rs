@@ -1,6 +1,6 @@
 //! Light transport shared by both passes: where a ray meets a surface (`hit`), the specular rules of
 //! mirrors and glass (`scatter`, with the pure formulas in `optics`), choosing points on the emitters
-//! (`emitters`), rays through cut-out textures (`cut_outs`), the photons traced once per run from the
+//! (`emitters`, near ones by solid angle: `solid_angle`), rays through cut-out textures (`cut_outs`), the photons traced once per run from the
 //! emitters through specular surfaces (`photons`), and the normals a diffuse point is shaded with
 //! (`shading`). Pass one (radiosity) and pass two (trace) both read from here; nothing here reads
 //! from either pass.
@@ -14,6 +14,7 @@ pub mod photons;
 pub mod ray_stack;
 pub mod scatter;
 pub mod shading;
+pub mod solid_angle;
 
 pub use hit::SurfaceHit;
 pub use photons::Photons;
