@@ -26,6 +26,10 @@ Rooms (unit: metres, y up):
   stair_hall   a tall hall (5.5 m) with twelve steps along a wall up to a landing 3 m up and a corridor
                leaving it, lit only by a window-like emitter high on a wall (session 21: a shape the
                hierarchy was not developed on).
+  fixture_room a plain room lit only by emitters that touch other surfaces at right angles, as exporters
+               write light fixtures: a ceiling fixture (a shallow box against the ceiling, bottom and
+               sides emitting) and a glowing cube standing in a corner against two walls (session 31:
+               the seam where a receiver meets an emitter, which sampling by area got wrong).
 
 Conventions (as every radray scene): right-handed; every polygon is counter-clockwise seen from its
 front, and every surface is one-sided and faces into the room (room shells inwards, furniture
@@ -750,7 +754,30 @@ def vault_hall():
     return m, cam
 
 
+def fixture_room():
+    m = room_model((0.42, 0.36, 0.30))
+    m.material("cabinet", Kd=(0.20, 0.45, 0.30))
+    m.material("fixture", Kd=(0, 0, 0), Ke=(14.0, 14.0, 13.0))
+    m.material("glow", Kd=(0, 0, 0), Ke=(7.0, 5.0, 2.6))
+    xs, zs, H = [0.0, 2.5, 5.0], [0.0, 2.0, 4.0], 2.6
+    shell(m, xs, zs, lambda i, j: (0.0, H), lambda i, j: "floor", lambda i, j: "ceiling",
+          lambda i, j, side, y0, y1: [(y0, y1, "wall")])
+    # the ceiling fixture: 0.8 x 0.8 m, 0.12 m deep, its top against the ceiling; bottom and sides emit
+    m.box("fixture", "fixture", (2.1, H - 0.12, 1.6), (2.9, H, 2.4), omit=("+y",))
+    # a glowing 0.4 m cube on the floor in the corner x = 5, z = 4, touching both walls
+    m.box("glow_cube", "glow", (4.6, 0.0, 3.6), (5.0, 0.4, 4.0), omit=("-y", "+x", "+z"))
+    table(m, 1.2, 2.4, 2.6, 3.4, 0.74, "wood")
+    m.box("cabinet", "cabinet", (2.9, 0.0, 3.5), (3.7, 1.6, 4.0), omit=("-y", "+z"))
+    m.write(os.path.join(HERE, "fixture_room"), "fixture_room: a plain room lit by a ceiling fixture and a glowing cube")
+    eye, look = (0.4, 1.45, 0.3), (3.9, 1.0, 3.5)
+    cam = {"eye": eye, "look_at": look, "up": rolled_up(eye, look, 0.0), "vfov_deg": 75.0}
+    write_toml("fixture_room", "A plain 5 x 4 m room, 2.6 m high, lit only by emitters that touch other surfaces at "
+               "right angles: a ceiling\n# fixture (bottom and sides emit) and a glowing cube in a corner; a table "
+               "and a cabinet.", cam)
+    return m, cam
+
+
 if __name__ == "__main__":
-    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda, vault_hall, stair_hall):
+    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda, vault_hall, stair_hall, fixture_room):
         model, _ = make()
         print("%-12s %4d triangles, %d materials" % (make.__name__, model.triangle_count(), len(model.materials)))
