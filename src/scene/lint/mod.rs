@@ -10,6 +10,7 @@
 //! the f32 spacing of the scene's coordinates): see [`LintOptions`]. This file holds the report's types
 //! and runs the checks; `report` prints it.
 
+pub mod contacts;
 pub mod crossings;
 pub mod flipped;
 mod grid;
@@ -199,6 +200,20 @@ fn frame_diagonal(surfaces: &[Surface], polys: &[Option<Poly>]) -> f64 {
     }
 }
 
+/// The pairs (i, j) of surfaces with polygons whose bounding boxes, grown by `tolerance`, meet, from a
+/// uniform grid over the boxes (`grid::candidate_pairs`, each pair once, O(nearby pairs)).
+fn nearby_pairs(polys: &[Option<Poly>], tolerance: f64) -> Vec<(usize, usize)> {
+    let live: Vec<usize> = (0..polys.len()).filter(|&i| polys[i].is_some()).collect();
+    let boxes: Vec<(DVec3, DVec3)> = live
+        .iter()
+        .map(|&i| {
+            let p = polys[i].as_ref().expect("live surfaces have a polygon");
+            (p.lo - DVec3::splat(tolerance), p.hi + DVec3::splat(tolerance))
+        })
+        .collect();
+    grid::candidate_pairs(&boxes).into_iter().map(|(a, b)| (live[a as usize], live[b as usize])).collect()
+}
+
 /// Checks the scene's surfaces with the default options (see [`check_surfaces`]).
 pub fn check(scene: &SceneDescription) -> GeometryReport {
     check_surfaces(&scene.surfaces, &LintOptions::default())
@@ -230,25 +245,15 @@ pub fn check_surfaces(surfaces: &[Surface], options: &LintOptions) -> GeometryRe
     let tolerance = if tolerance > 0.0 { tolerance } else { f32::EPSILON as f64 };
     let vertex_ids = weld::weld_vertices(&polys, tolerance);
 
-    // Pairwise checks over grid candidates.
-    let live: Vec<usize> = (0..polys.len()).filter(|&i| polys[i].is_some()).collect();
-    let boxes: Vec<(DVec3, DVec3)> = live
-        .iter()
-        .map(|&i| {
-            let p = polys[i].as_ref().expect("live surfaces have a polygon");
-            (p.lo - DVec3::splat(tolerance), p.hi + DVec3::splat(tolerance))
-        })
-        .collect();
-    // Each pair is examined on its own (in parallel); the findings are gathered in the pairs' order,
-    // so the report is the same for any number of threads.
-    let pairs = grid::candidate_pairs(&boxes);
+    // Pairwise checks over grid candidates. Each pair is examined on its own (in parallel); the
+    // findings are gathered in the pairs' order, so the report is the same for any number of threads.
+    let pairs = nearby_pairs(&polys, tolerance);
     let candidate_pairs = pairs.len();
     let mut t_junctions = t_junctions::Collector::new(surfaces, &vertex_ids, tolerance);
     let collector = &t_junctions;
     let per_pair: Vec<PairFindings> = pairs
         .par_iter()
-        .filter_map(|&(a, b)| {
-            let (i, j) = (live[a as usize], live[b as usize]);
+        .filter_map(|&(i, j)| {
             let (pi, pj) = (polys[i].as_ref().expect("live"), polys[j].as_ref().expect("live"));
             let t_junctions = collector.pair((i, pi), (j, pj));
             let mut found = PairFindings { t_junctions, overlap: None, intersection: None };
