@@ -305,19 +305,9 @@ impl Emitters {
         self.total_area
     }
 
-    /// p_A(x) = P_polygon/A_polygon, the area density with which `sample` draws a point on mesh
-    /// triangle `t` (0 for a triangle that is not an emitter here). O(log n); for the MIS weights of
-    /// rays that hit an emitter by chance.
-    pub fn area_density(&self, t: u32) -> f32 {
-        match self.triangle.binary_search(&t) {
-            Ok(i) => 1.0 / self.polygons[self.polygon_of[i] as usize].inverse_density,
-            Err(_) => 0.0,
-        }
-    }
-
     /// The area density p_A(y) with which `sample_from(x, …)` draws point `y` of mesh triangle `t` (0
-    /// for a triangle that is not an emitter here): `area_density` where the polygon is sampled by
-    /// area from x, else P·cos θ'/(Ω r²), the solid-angle density P/Ω carried to the area at y
+    /// for a triangle that is not an emitter here): P/A where the polygon is sampled by area from x,
+    /// else P·cos θ'/(Ω r²), the solid-angle density P/Ω carried to the area at y
     /// (r = |y − x|, θ' between the polygon's normal and y − x). For the MIS weights of rays from x
     /// that hit an emitter by chance.
     pub fn area_density_from(&self, t: u32, x: Vec3, y: Vec3) -> f32 {
@@ -336,10 +326,11 @@ impl Emitters {
         }
     }
 
-    /// The point for uniform numbers (ξ, r) as seen from receiver point `x`: the polygon as `sample`
-    /// selects it; on it, a point uniform in the solid angle it subtends from x when x is within
-    /// `NEAR_RADII` of it (the fan triangle by its solid angle Ωₖ, then Arvo's map,
-    /// `solid_angle::sample_towards`), else uniform by area as `sample`. `inverse_density` is then
+    /// The point for uniform numbers (ξ, r) as seen from receiver point `x`: the `WarpTree` selects
+    /// the polygon in proportion to its power and hands on (ξ, r) rescaled, which place the point on
+    /// it: uniformly in the solid angle it subtends from x when x is within `NEAR_RADII` of it (the
+    /// fan triangle by its solid angle Ωₖ, then Arvo's map, `solid_angle::sample_towards`), else
+    /// uniformly by area (`on_polygon`); the triangle is the one under the point. `inverse_density` is then
     /// 1/p_A = Ω r²/(P cos θ'), so that the caller's cos θ cos θ'/r² · 1/p_A = cos θ · Ω/P is bounded
     /// however close the polygon. `None` without emitters.
     pub fn sample_from(&self, mesh: &Mesh, x: Vec3, xi: f32, r: f32) -> Option<EmitterSample> {
@@ -380,19 +371,8 @@ impl Emitters {
         Some(EmitterSample { triangle: self.triangle[entry as usize], point, inverse_density })
     }
 
-    /// The point for uniform numbers (ξ, r): the `WarpTree` selects the polygon in proportion to its
-    /// power and hands on (ξ, r) rescaled, which place the point on it (`EmitterPolygon::point`, or
-    /// `uniform_triangle_point` for a lone triangle); the triangle is the one under the point.
-    /// `None` without emitters.
-    pub fn sample(&self, mesh: &Mesh, xi: f32, r: f32) -> Option<EmitterSample> {
-        if self.triangle.is_empty() {
-            return None;
-        }
-        let (k, rest) = self.table.select([xi, r]);
-        Some(self.on_polygon(mesh, k, rest))
-    }
-
-    /// The point uniform by area on polygon `k` for the warp's leftover `rest`.
+    /// The point uniform by area on polygon `k` for the warp's leftover `rest` (`EmitterPolygon::point`, or
+    /// `uniform_triangle_point` for a lone triangle).
     fn on_polygon(&self, mesh: &Mesh, k: usize, rest: [f32; 2]) -> EmitterSample {
         let polygon = &self.polygons[k];
         let (entry, point) = match &polygon.shape {
