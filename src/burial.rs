@@ -1,9 +1,10 @@
 //! Elements buried under one-sided surfaces: the floor under a block, the ceiling behind a lamp that
 //! hangs just below it. Pass one sees the backs of one-sided surfaces as opaque, so such elements get
 //! (correctly) almost no light; but they share vertices with visible neighbours, and Gouraud averaging
-//! would pull those vertices dark. `Mesh::vertex_average` leaves buried elements out. Where a
-//! surface's elements are all buried at their centres but partly open (an object piercing the
-//! surface), `bury` moves their hemicubes' eyes to an open point instead (`Mesh::element_eye`).
+//! would pull those vertices dark. `Mesh::vertex_average` leaves buried elements out. An element
+//! buried at its centre but partly open (it straddles the outline of what rests on it, or an object
+//! pierces it) measures its value at an open point of it instead (`Mesh::element_eye`): otherwise the
+//! light its open part receives and reflects is lost to the room.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -19,6 +20,13 @@ const RAYS_SIDE: usize = 4;
 /// buried (`Mesh::element_buried`): it is then mostly inside or under something, and its radiosity
 /// does not describe the visible surface around it.
 pub const BURIED_SHARE: f32 = 0.5;
+
+/// At most this share of the hemisphere hidden makes a point of a buried element open enough to
+/// measure the element there (`bury`, unless a stranded vertex asks for less): one ray of 16. Strict on
+/// purpose: inside a box whose open side stands against a wall, the floor near the wall sees the wall's
+/// front through that side and only half its hemisphere ends on the box's backs, though no light gets
+/// in (gap_room's cabinet).
+pub const OPEN_SHARE: f32 = 1.0 / 16.0;
 
 /// The share of element i's cosine-weighted hemisphere, seen from `point` on it lifted by 10⁻³ of its
 /// size along the normal (where its hemicube's eye sits), that ends on the back of a one-sided opaque
@@ -60,9 +68,9 @@ pub fn hidden_share(mesh: &Mesh, accel: &Accel) -> Vec<f32> {
 const EYE_REACH: f32 = 0.75;
 
 /// An open point of element i, whose centre is buried: of the points c + 0.75·(q − c) for q its
-/// corners and edge midpoints (c its centre), the first least hidden one, if at most `BURIED_SHARE`
+/// corners and edge midpoints (c its centre), the first least hidden one, if at most `open_share`
 /// of its hemisphere is hidden.
-fn open_eye(mesh: &Mesh, accel: &Accel, i: usize) -> Option<Vec3> {
+fn open_eye(mesh: &Mesh, accel: &Accel, i: usize, open_share: f32) -> Option<Vec3> {
     let centre = mesh.elements.centre[i];
     let corners: Vec<Vec3> = mesh.elements.polygon(&mesh.positions, i).collect();
     let midpoints = (0..corners.len()).map(|k| (corners[k] + corners[(k + 1) % corners.len()]) * 0.5);
@@ -70,7 +78,7 @@ fn open_eye(mesh: &Mesh, accel: &Accel, i: usize) -> Option<Vec3> {
     let (share, point) = candidates
         .map(|p| (hidden_share_at(mesh, accel, i, p), p))
         .fold((f32::INFINITY, centre), |best, next| if next.0 < best.0 { next } else { best });
-    (share <= BURIED_SHARE).then_some(point)
+    (share <= open_share).then_some(point)
 }
 
 /// `Mesh::element_buried` and `Mesh::element_eye` for `mesh`. An element is buried when more than
@@ -80,9 +88,13 @@ fn open_eye(mesh: &Mesh, accel: &Accel, i: usize) -> Option<Vec3> {
 /// surface's visible part around it draws as dark as the inside of what buries it: a capital whose
 /// underside is pierced by its column at every element's centre. A buried element with such an open,
 /// stranded vertex (open: `hidden_share_at` a point 2% of the way from it to the centre) measures its
-/// value at an open point of it instead (`open_eye`) and is not buried. Everything else keeps its
-/// centre: the floor under a block stays buried, and its rim's vertices take the open elements'
-/// values. `element_eye` is empty when no eye moved.
+/// value at a point of it where at most `BURIED_SHARE` is hidden instead (`open_eye`) and is not
+/// buried. So does any other buried element with a point where at most `OPEN_SHARE` is hidden: one
+/// that straddles the outline of what rests on it. Its centre sees no light, but its open part lies in
+/// the seam beside the object, often the brightest strip of the surface (a ceiling beside a fixture's
+/// glowing sides); measured at the centre, that strip's reflected light was lost to the whole room
+/// (fixture_room's uniform mesh 3.7% dark; docs/accuracy.md, session 32). Elements wholly under a
+/// block have no such point and stay buried. `element_eye` is empty when no eye moved.
 pub fn bury(mesh: &Mesh) -> (Vec<bool>, Vec<Vec3>) {
     let accel = Accel::build(&mesh.positions, &mesh.triangles);
     let mut buried: Vec<bool> = hidden_share(mesh, &accel).into_iter().map(|s| s > BURIED_SHARE).collect();
@@ -102,8 +114,10 @@ pub fn bury(mesh: &Mesh) -> (Vec<bool>, Vec<Vec3>) {
     let candidates: Vec<usize> = (0..buried.len()).filter(|&e| buried[e]).collect();
     let eyes: Vec<(usize, Vec3)> = candidates
         .par_iter()
-        .filter(|&&e| stranded(e))
-        .filter_map(|&e| open_eye(mesh, &accel, e).map(|p| (e, p)))
+        .filter_map(|&e| {
+            let open_share = if stranded(e) { BURIED_SHARE } else { OPEN_SHARE };
+            open_eye(mesh, &accel, e, open_share).map(|p| (e, p))
+        })
         .collect();
     if eyes.is_empty() {
         return (buried, Vec::new());
