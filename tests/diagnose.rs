@@ -208,33 +208,6 @@ fn a_turned_room_is_checked_with_the_tolerance_it_has_unturned() {
     assert_eq!(counts(&b), counts(&a), "turned:\n{b}\nunturned:\n{a}");
 }
 
-/// Emitters resting on a face at an angle (`lint::contacts`): the fixture room's fixture stands on
-/// the two-by-two cells of its ceiling with its four sides (8 pairs), and its glowing cube on a floor
-/// cell (2) and against both walls with its sides and its top (4). The Cornell boxes' lights hang
-/// 0.1 mm below their ceilings and the furnace's walls meet along their edges: none.
-#[test]
-fn emitters_resting_on_faces_are_found_where_a_fixture_touches_the_ceiling() {
-    let contacts = |name: &str| {
-        let s = shipped(name);
-        lint::contacts::emitter_contacts(&s.surfaces, &s.materials)
-    };
-    let fixture = contacts("rooms/fixture_room.toml");
-    let count = |emitter: &str, face: &str| {
-        fixture.iter().filter(|c| c.emitter.object == emitter && c.face.object == face).count()
-    };
-    assert_eq!(fixture.len(), 14, "{fixture:?}");
-    assert_eq!((count("fixture", "ceiling"), count("glow_cube", "floor"), count("glow_cube", "walls")), (8, 2, 4));
-    for name in [
-        "cornell_box.toml",
-        "cornell_empty.toml",
-        "furnace.toml",
-        "rooms/l_room.toml",
-        "mcguire/CornellBox-Original.toml",
-    ] {
-        assert!(contacts(name).is_empty(), "{name}: {:?}", contacts(name));
-    }
-}
-
 #[test]
 fn shipped_furnace_is_clean() {
     let r = lint::check(&shipped("furnace.toml"));

@@ -288,20 +288,6 @@ fn uniform_outlook(scene: &SceneDescription) -> Result<Option<UniformOutlook>, S
             ));
         }
     }
-    let contacts = crate::scene::lint::contacts::emitter_contacts(&scene.surfaces, &scene.materials);
-    if let Some(c) = contacts.first() {
-        let [x, y, z] = c.point;
-        return Err(format!(
-            "emitter `{}` rests on surface `{}` at ({x:.4}, {y:.4}, {z:.4}){}: the uniform mesh's elements would \
-             straddle its outline and lose the light of that seam",
-            c.emitter.object,
-            c.face.object,
-            match contacts.len() {
-                1 => String::new(),
-                n => format!(" and {} more such contacts", n - 1),
-            }
-        ));
-    }
     if !params.store_form_factors {
         return Ok(None);
     }
@@ -378,10 +364,7 @@ pub fn auto_prefers_adaptive(scene: &SceneDescription, reader: SolutionReader) -
     }
 }
 
-/// Why `method = "auto"` leaves the uniform mesh for the hierarchy, or `None` to keep it. Whenever an
-/// emitter rests inside another face at an angle (`scene::lint::contacts`: a fixture against a
-/// ceiling): the uniform mesh straddles that seam (fixture_room: 3.7% of the light lost, final
-/// relMSE 1.3e-3 against the hierarchy's 3.9e-4; docs/accuracy.md, session 31). With
+/// Why `method = "auto"` leaves the uniform mesh for the hierarchy, or `None` to keep it. With
 /// `store_form_factors = false` (matrix-free, O(n) memory) only above `run::MAX_ELEMENTS` elements.
 /// With the stored matrix also when its size from the element count alone
 /// (`form_factors::matrix_bytes_from_counts`, every element a row) exceeds the `memory` budget or the

@@ -10,7 +10,6 @@
 //! the f32 spacing of the scene's coordinates): see [`LintOptions`]. This file holds the report's types
 //! and runs the checks; `report` prints it.
 
-pub mod contacts;
 pub mod crossings;
 pub mod flipped;
 mod grid;
