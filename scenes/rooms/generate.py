@@ -30,6 +30,10 @@ Rooms (unit: metres, y up):
                write light fixtures: a ceiling fixture (a shallow box against the ceiling, bottom and
                sides emitting) and a glowing cube standing in a corner against two walls (session 31:
                the seam where a receiver meets an emitter, which sampling by area got wrong).
+  living_room  a room with a bay, lit only by a glowing table lamp standing on a side table and an
+               uplighter's shade on a pole, with a sofa turned by 12 degrees (its backrest standing on
+               its seat), a coffee table and a bookcase against a wall; written as triangles (session 32:
+               objects resting on faces off the grid of the faces they rest on, at turned angles).
 
 Conventions (as every radray scene): right-handed; every polygon is counter-clockwise seen from its
 front, and every surface is one-sided and faces into the room (room shells inwards, furniture
@@ -143,7 +147,9 @@ class Model:
     def triangle_count(self):
         return sum(len(f[0]) - 2 for _, fs in self.objects.values() for f in fs)
 
-    def write(self, folder, header):
+    def write(self, folder, header, triangulate=False):
+        """scene.obj + scene.mtl in `folder`; with `triangulate`, every polygon is written as a fan of
+        triangles, as most exporters write meshes."""
         os.makedirs(folder, exist_ok=True)
         vid, vlist, tid, tlist, nid, nlist = {}, [], {}, [], {}, []
 
@@ -172,7 +178,9 @@ class Model:
         for name in self.order:
             mat, faces = self.objects[name]
             body.append("\no %s\ng %s\nusemtl %s" % (name, name, mat))
-            for pts, uvs, nrm in faces:
+            fans = [([pts[0], pts[k], pts[k + 1]], uvs and [uvs[0], uvs[k], uvs[k + 1]],
+                     nrm and [nrm[0], nrm[k], nrm[k + 1]]) for pts, uvs, nrm in faces for k in range(1, len(pts) - 1)]
+            for pts, uvs, nrm in (fans if triangulate else faces):
                 if nrm:
                     body.append("f " + " ".join("%d//%d" % (vi(p), ni(n)) for p, n in zip(pts, nrm)))
                 elif uvs:
@@ -777,7 +785,46 @@ def fixture_room():
     return m, cam
 
 
+def living_room():
+    m = room_model((0.40, 0.28, 0.17))
+    m.material("sofa", Kd=(0.18, 0.28, 0.50))
+    m.material("shelves", Kd=(0.62, 0.58, 0.50))
+    m.material("metal", Kd=(0.10, 0.10, 0.10))
+    m.material("table_lamp", Kd=(0, 0, 0), Ke=(30.0, 24.0, 15.0))
+    m.material("uplighter", Kd=(0, 0, 0), Ke=(26.0, 25.0, 23.0))
+    # a 5.5 x 4.5 m room, 2.7 m high, with a 2.5 m wide, 0.8 m deep bay in the wall z = 4.5
+    xs, zs, H = [0.0, 1.5, 4.0, 5.5], [0.0, 2.5, 4.5, 5.3], 2.7
+
+    def column(i, j):
+        return (0.0, H) if j < 2 or i == 1 else None
+
+    shell(m, xs, zs, column, lambda i, j: "floor", lambda i, j: "ceiling",
+          lambda i, j, side, y0, y1: [(y0, y1, "wall")])
+    # a sofa turned by 12 degrees: a seat block with a backrest standing on it, both on the floor plan
+    m.oriented_box("sofa", "sofa", (2.55, 0.0, 3.55), (2.1, 0.42, 0.9), 12.0)
+    m.oriented_box("sofa_back", "sofa", (2.55 + 0.38 * math.sin(math.radians(12)), 0.42,
+                                          3.55 + 0.38 * math.cos(math.radians(12))), (2.1, 0.4, 0.14), 12.0)
+    # a side table beside it with a glowing lamp block (sides and top emit) standing on it, turned 30 deg
+    m.box("side_table", "wood", (0.75, 0.0, 3.35), (1.25, 0.55, 3.85), omit=("-y",))
+    m.oriented_box("table_lamp", "table_lamp", (1.0, 0.55, 3.6), (0.28, 0.34, 0.28), 30.0)
+    # an uplighter near the corner x = 5.5, z = 4.5: a thin pole on the floor carrying a glowing shallow shade
+    m.oriented_box("pole", "metal", (4.3, 0.0, 4.1), (0.04, 1.7, 0.04), 0.0)
+    m.oriented_box("uplighter", "uplighter", (4.3, 1.7, 4.1), (0.42, 0.1, 0.42), 45.0, omit_bottom=False)
+    # a low coffee table in front of the sofa and a bookcase against the wall x = 0
+    table(m, 2.0, 3.1, 1.95, 2.55, 0.42, "wood")
+    m.box("bookcase", "shelves", (0.0, 0.0, 0.9), (0.35, 1.9, 2.2), omit=("-y", "-x"))
+    m.write(os.path.join(HERE, "living_room"), "living_room: a room with a bay, lit by a table lamp and an uplighter",
+            triangulate=True)
+    eye, look = (4.9, 1.55, 0.35), (1.4, 0.75, 3.9)
+    cam = {"eye": eye, "look_at": look, "up": rolled_up(eye, look, 0.0), "vfov_deg": 70.0}
+    write_toml("living_room", "A 5.5 x 4.5 m room with a bay, 2.7 m high, lit only by a glowing table lamp standing on a "
+               "side table and an\n# uplighter's shade on a pole; a turned sofa, a coffee table, a bookcase. "
+               "Written as triangles, as exporters do.", cam)
+    return m, cam
+
+
 if __name__ == "__main__":
-    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda, vault_hall, stair_hall, fixture_room):
+    for make in (l_room, gap_room, alcove_hall, textured_box, rotunda, vault_hall, stair_hall, fixture_room,
+                 living_room):
         model, _ = make()
         print("%-12s %4d triangles, %d materials" % (make.__name__, model.triangle_count(), len(model.materials)))
