@@ -23,6 +23,8 @@ pub struct InfoReport {
     pub scene: String,
     pub surfaces: usize,
     pub materials: usize,
+    /// Triangle pairs the mesher takes as quads (`mesh::pair_triangles`).
+    pub triangle_pairs: usize,
     pub elements: u64,
     pub max_element_edge: f32,
     pub hemicube_resolution_px: u32,
@@ -86,6 +88,10 @@ pub fn describe(scene: &SceneDescription) -> InfoReport {
         scene: scene.path.display().to_string(),
         surfaces: scene.surfaces.len(),
         materials: scene.materials.len(),
+        triangle_pairs: mesh::pair_triangles(&scene.surfaces)
+            .iter()
+            .filter(|m| matches!(m, mesh::Meshing::Quad { .. }))
+            .count(),
         elements,
         max_element_edge: p.max_element_edge,
         hemicube_resolution_px: p.hemicube_resolution_px,
@@ -148,7 +154,11 @@ impl std::fmt::Display for InfoReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         const MIB: f64 = (1u64 << 20) as f64;
         writeln!(f, "scene           {}", self.scene)?;
-        writeln!(f, "surfaces        {} ({} materials)", self.surfaces, self.materials)?;
+        write!(f, "surfaces        {} ({} materials", self.surfaces, self.materials)?;
+        if self.triangle_pairs > 0 {
+            write!(f, "; {} triangle pairs meshed as quads", self.triangle_pairs)?;
+        }
+        writeln!(f, ")")?;
         writeln!(f, "elements        {} (max element edge {})", self.elements, self.max_element_edge)?;
         writeln!(f, "hemicube        {}² top face, solver {}", self.hemicube_resolution_px, self.solver)?;
         writeln!(f, "pass one        {}", self.pass_one_method)?;

@@ -83,6 +83,7 @@ pub fn split(mesh: &Mesh, split: &[bool], midpoints: &mut EdgeMidpoints) -> Mesh
         uvs: mesh.uvs.clone(),
         surface_source: mesh.surface_source.clone(),
         surface_has_uv: mesh.surface_has_uv.clone(),
+        surface_partner: mesh.surface_partner.clone(),
         surface_back_refracts: mesh.surface_back_refracts.clone(),
         textures: mesh.textures.clone(),
         ..Default::default()

@@ -1,12 +1,17 @@
 //! Meshing: the scene's polygons become elements. Quads are cut into quad grids and triangles into
 //! triangle grids so that no element edge exceeds `max_element_edge`; the elements of one surface share
-//! their vertices, so per-vertex values interpolate without T-vertices inside a surface.
+//! their vertices, so per-vertex values interpolate without T-vertices inside a surface. Two triangles
+//! that are the halves of one planar quad are meshed as that quad (`pairs`).
 //!
 //! Hot per-element data is kept as a struct of arrays (`Elements`); each element is also split into
 //! one or two triangles for ray tracing (`Mesh::triangles`).
 //!
 //! Texture coordinates are interpolated like positions. An element of a `map_Kd` material reflects its
 //! mean albedo over its uv triangles in pass one (`Mesh::build_with_textures`).
+
+mod pairs;
+
+pub use pairs::{pair_triangles, Meshing};
 
 use crate::material::SceneTextures;
 use crate::scene::{Material, SceneDescription, Surface};
@@ -100,6 +105,10 @@ pub struct Mesh {
     pub surface_source: Vec<u32>,
     /// For each mesh surface: its scene surface has texture coordinates.
     pub surface_has_uv: Vec<bool>,
+    /// For each mesh surface meshed as a triangle pair's quad (`pair_triangles`): the scene triangle
+    /// paired with its own (whose shading normals hold beyond the shared edge), else `NONE`; empty
+    /// when no surface is paired.
+    pub surface_partner: Vec<u32>,
     /// For each mesh surface: one-sided and dielectric (a water surface, an open glass sheet), so a
     /// ray that meets its back is refracted out of the medium instead of stopped (`back_refracts`);
     /// empty when the scene has none.
@@ -220,24 +229,35 @@ fn segments(len: f32, max_edge: f32) -> u32 {
 /// Elements `Mesh::build` would make of `scene` at `max_element_edge`, counted without building
 /// anything (so a run can refuse an impossible mesh before allocating it).
 pub fn count_elements(scene: &SceneDescription, max_element_edge: f32) -> u64 {
-    scene.surfaces.iter().map(|s| count_surface_elements(s, max_element_edge)).sum()
+    let plan = pair_triangles(&scene.surfaces);
+    scene
+        .surfaces
+        .iter()
+        .zip(&plan)
+        .map(|(surface, meshing)| {
+            let per_side = match meshing {
+                Meshing::Own => count_polygon_elements(&surface.vertices, max_element_edge),
+                Meshing::Quad { corners, .. } => count_polygon_elements(corners, max_element_edge),
+                Meshing::Absorbed => 0,
+            };
+            if surface.two_sided {
+                2 * per_side
+            } else {
+                per_side
+            }
+        })
+        .sum()
 }
 
-/// Elements one surface becomes (both sides of a two-sided one).
-pub fn count_surface_elements(surface: &Surface, max_element_edge: f32) -> u64 {
-    let q = &surface.vertices;
-    let per_side = if q.len() == 4 {
+/// Elements one side of a polygon (a triangle or quad) becomes.
+fn count_polygon_elements(q: &[Vec3], max_element_edge: f32) -> u64 {
+    if q.len() == 4 {
         let nu = segments((q[1] - q[0]).length().max((q[2] - q[3]).length()), max_element_edge) as u64;
         let nv = segments((q[3] - q[0]).length().max((q[2] - q[1]).length()), max_element_edge) as u64;
         nu * nv
     } else {
         let longest = (0..q.len()).map(|k| (q[(k + 1) % q.len()] - q[k]).length()).fold(0.0, f32::max);
         (segments(longest, max_element_edge) as u64).pow(2)
-    };
-    if surface.two_sided {
-        2 * per_side
-    } else {
-        per_side
     }
 }
 
@@ -265,6 +285,7 @@ impl Mesh {
             + bytes(&self.triangle_back_vertices)
             + bytes(&self.surface_source)
             + bytes(&self.surface_has_uv)
+            + bytes(&self.surface_partner)
             + bytes(&self.surface_back_refracts)
             + bytes(&self.element_coverage)
             + bytes(&self.element_buried)
@@ -311,16 +332,28 @@ impl Mesh {
         // Two-sided surfaces with the ranges of elements and triangles their front side produced
         // (one surface's pieces are contiguous), so mirroring them is linear in the mesh size.
         let mut back_sides = Vec::new();
-        for (s, surface) in scene.surfaces.iter().enumerate() {
+        let plan = pair_triangles(&scene.surfaces);
+        for ((s, surface), meshing) in scene.surfaces.iter().enumerate().zip(&plan) {
             let material = &scene.materials[surface.material as usize];
             let (first_element, first_triangle) = (mesh.elements.len(), mesh.triangles.len());
             let first_vertex = mesh.positions.len();
-            mesh.add_surface(&surface.vertices, s as u32, surface.material, material, max_element_edge);
+            let polygon: &[Vec3] = match meshing {
+                Meshing::Own => &surface.vertices,
+                Meshing::Quad { corners, .. } => corners,
+                Meshing::Absorbed => &[],
+            };
+            if !polygon.is_empty() {
+                mesh.add_surface(polygon, s as u32, surface.material, material, max_element_edge);
+            }
             mesh.interpolate_uvs(first_vertex, surface);
             mesh.surface_source.push(s as u32);
             mesh.surface_has_uv.push(surface.uvs.is_some());
             mesh.surface_back_refracts.push(!surface.two_sided && material.is_dielectric());
-            if surface.two_sided {
+            mesh.surface_partner.push(match meshing {
+                Meshing::Quad { partner, .. } => *partner,
+                _ => NONE,
+            });
+            if surface.two_sided && !polygon.is_empty() {
                 back_sides.push((s, first_element..mesh.elements.len(), first_triangle..mesh.triangles.len()));
             }
         }
@@ -332,17 +365,22 @@ impl Mesh {
             mesh.surface_source.push(s as u32);
             mesh.surface_has_uv.push(surface.uvs.is_some());
             mesh.surface_back_refracts.push(false);
+            mesh.surface_partner.push(mesh.surface_partner[s]);
             mesh.add_back_side(front, front_triangles, mesh_surface, surface.material, material);
         }
         if !mesh.surface_back_refracts.contains(&true) {
             mesh.surface_back_refracts = Vec::new();
+        }
+        if mesh.surface_partner.iter().all(|&p| p == NONE) {
+            mesh.surface_partner = Vec::new();
         }
         mesh
     }
 
     /// Texture coordinates of the vertices `first_vertex..` that `add_surface` just made of `surface`:
     /// the surface's uv at the same bilinear (quad) or barycentric (triangle) weights as each position,
-    /// recovered from the position itself; (0, 0) without uv.
+    /// recovered from the position itself (over a paired quad, the triangle's affine map extended);
+    /// (0, 0) without uv.
     fn interpolate_uvs(&mut self, first_vertex: usize, surface: &Surface) {
         let uvs = match &surface.uvs {
             Some(uvs) if uvs.len() == surface.vertices.len() => uvs,
@@ -569,13 +607,22 @@ impl Mesh {
 
     /// The smooth normal at `p` on `element`'s scene surface, oriented like `facing`: the surface's
     /// vertex normals (`Surface::shading_normals`) interpolated linearly over the triangle (a quad: over
-    /// the fan triangle (0,1,2) or (0,2,3) holding p). `facing` where the surface has none (or they
-    /// cancel). The diffuse term's cosines use it (`transport::shading`).
+    /// the fan triangle (0,1,2) or (0,2,3) holding p; a triangle pair's quad, `surface_partner`: over
+    /// the scene triangle of the pair that holds p, so the pair shades as the two triangles did).
+    /// `facing` where that surface has none (or they cancel). The diffuse term's cosines use it
+    /// (`transport::shading`).
     pub fn interpolated_normal(&self, surfaces: &[Surface], element: usize, p: Vec3, facing: Vec3) -> Vec3 {
         let mesh_surface = self.elements.surface[element] as usize;
-        let Some(surface) = self.surface_source.get(mesh_surface).and_then(|&s| surfaces.get(s as usize)) else {
+        let Some(mut surface) = self.surface_source.get(mesh_surface).and_then(|&s| surfaces.get(s as usize)) else {
             return facing;
         };
+        let partner = self.surface_partner.get(mesh_surface).and_then(|&t| surfaces.get(t as usize));
+        if let Some(partner) = partner.filter(|_| surface.vertices.len() == 3) {
+            let v = &surface.vertices;
+            if barycentric(v[0], v[1], v[2], p).min_element() < 0.0 {
+                surface = partner;
+            }
+        }
         let Some(normals) = &surface.shading_normals else {
             return facing;
         };
@@ -583,19 +630,12 @@ impl Mesh {
             return facing;
         }
         let v = &surface.vertices;
-        let barycentric = |a: Vec3, b: Vec3, c: Vec3| {
-            let n = (b - a).cross(c - a);
-            let inv = 1.0 / n.length_squared();
-            let w1 = (p - a).cross(c - a).dot(n) * inv;
-            let w2 = (b - a).cross(p - a).dot(n) * inv;
-            (1.0 - w1 - w2, w1, w2)
-        };
-        let (w0, w1, w2) = barycentric(v[0], v[1], v[2]);
-        let n = if v.len() == 4 && w1 < 0.0 {
-            let (u0, u2, u3) = barycentric(v[0], v[2], v[3]);
-            normals[0] * u0 + normals[2] * u2 + normals[3] * u3
+        let w = barycentric(v[0], v[1], v[2], p);
+        let n = if v.len() == 4 && w.y < 0.0 {
+            let u = barycentric(v[0], v[2], v[3], p);
+            normals[0] * u.x + normals[2] * u.y + normals[3] * u.z
         } else {
-            normals[0] * w0 + normals[1] * w1 + normals[2] * w2
+            normals[0] * w.x + normals[1] * w.y + normals[2] * w.z
         };
         let n = n.normalize_or_zero();
         if n == Vec3::ZERO {
