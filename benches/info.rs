@@ -1,6 +1,7 @@
 //! Criterion bench of `radray info` (loading excluded): the geometry check and the element/form-factor
 //! estimate on a ~100k-triangle procedural room, two-sided like real exported scenes, with the defects
-//! the check looks for (furniture corners on tiled floor edges, spheres cutting into walls).
+//! the check looks for (furniture corners on tiled floor edges, spheres cutting into walls); and the
+//! pairing of its triangles into quads that meshing and the element count run.
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use radray::scene::shapes::{box_faces, sphere_triangles};
@@ -80,6 +81,11 @@ fn info(c: &mut Criterion) {
     group.throughput(Throughput::Elements(scene.surfaces.len() as u64));
     group.bench_function("geometry_check", |b| b.iter(|| lint::check(black_box(&scene))));
     group.bench_function("describe", |b| b.iter(|| radray::info::describe(black_box(&scene))));
+    // The tiles' triangle pairs meshed as quads (`mesh::pair_triangles`): the pairing alone, and the
+    // element count that runs it before anything is meshed.
+    group.bench_function("pair_triangles", |b| b.iter(|| radray::mesh::pair_triangles(black_box(&scene.surfaces))));
+    let edge = scene.radiosity.max_element_edge;
+    group.bench_function("count_elements", |b| b.iter(|| radray::mesh::count_elements(black_box(&scene), edge)));
     group.finish();
 }
 

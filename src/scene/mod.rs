@@ -168,9 +168,17 @@ pub struct AdaptiveSettings {
     pub auto: Option<bool>,
 }
 
+/// `adaptive_levels` of a scene without a preset and of the `default` and `high` presets (`preview`
+/// keeps one level). Measured on nine rooms in radiosity mode (session 33, docs/accuracy.md): a second
+/// level cost 1.6–2.3× the CPU time and lowered relMSE on eight, by 14–64% on seven (the rotunda
+/// 9.25e-4 → 3.32e-4, alcove_hall 3.61e-4 → 1.45e-4, fixture_room 1.66e-3 → 7.11e-4; stair_hall
+/// −3%), raising it on cornell_empty (2.47e-5 → 3.04e-5); a third level moved living_room and the
+/// rotunda by 2% or less.
+pub const DEFAULT_ADAPTIVE_LEVELS: u32 = 2;
+
 impl Default for AdaptiveSettings {
     fn default() -> Self {
-        AdaptiveSettings { levels: 1, threshold: 0.1, auto: None }
+        AdaptiveSettings { levels: DEFAULT_ADAPTIVE_LEVELS, threshold: 0.1, auto: None }
     }
 }
 
@@ -673,6 +681,14 @@ impl Quality {
         }
     }
 
+    /// `adaptive_levels`: rounds of adaptive-mesh subdivision after the patch solve.
+    pub fn adaptive_mesh_levels(self) -> u32 {
+        match self {
+            Quality::Preview => 1,
+            Quality::Default | Quality::High => DEFAULT_ADAPTIVE_LEVELS,
+        }
+    }
+
     /// (final gather, gather rays, cache accuracy)
     pub fn gather_settings(self) -> (FinalGatherMode, u32, f32) {
         match self {
@@ -716,6 +732,7 @@ impl SceneDescription {
         self.image.adaptive_max_samples = adaptive_max_samples.max(spp);
         self.render.light_samples = light_samples;
         self.radiosity.hierarchy.preset = quality;
+        self.radiosity.adaptive.levels = quality.adaptive_mesh_levels();
         let (final_gather, gather_rays, cache_accuracy) = quality.gather_settings();
         self.render.final_gather = final_gather;
         self.render.gather_rays = gather_rays;
