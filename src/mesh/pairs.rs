@@ -11,7 +11,6 @@
 use super::surface_uv;
 use crate::scene::Surface;
 use glam::Vec3;
-use rustc_hash::FxHashMap;
 
 /// How the mesher takes one scene surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,22 +56,26 @@ type PointKey = [u32; 3];
 pub fn pair_triangles(surfaces: &[Surface]) -> Vec<Meshing> {
     let mut plan = vec![Meshing::Own; surfaces.len()];
     let key = |p: Vec3| -> PointKey { (p + Vec3::ZERO).to_array().map(f32::to_bits) };
-    // Directed edge (from, to) as bit patterns → the triangles (and their edge index) running along it.
-    let mut edges: FxHashMap<(PointKey, PointKey), Vec<(u32, u8)>> = FxHashMap::default();
+    // Every directed edge (from, to) of a pairable triangle as bit patterns, with its triangle and edge
+    // index, sorted so that the triangles running along an edge are one range.
+    let mut edges: Vec<(PointKey, PointKey, u32, u8)> = Vec::new();
     for (s, surface) in surfaces.iter().enumerate().filter(|(_, surface)| pairable(surface)) {
         let v = &surface.vertices;
         for k in 0..3 {
-            edges.entry((key(v[k]), key(v[(k + 1) % 3]))).or_default().push((s as u32, k as u8));
+            edges.push((key(v[k]), key(v[(k + 1) % 3]), s as u32, k as u8));
         }
     }
+    edges.sort_unstable();
     let mut candidates: Vec<(f32, u32, u32, [Vec3; 4])> = Vec::new();
-    for (s, surface) in surfaces.iter().enumerate().filter(|(_, surface)| pairable(surface)) {
-        let v = &surface.vertices;
-        for k in 0..3 {
-            let Some(partners) = edges.get(&(key(v[(k + 1) % 3]), key(v[k]))) else { continue };
-            for &(t, m) in partners.iter().filter(|&&(t, _)| t as usize > s) {
-                if let Some((score, corners)) = quad_of(surface, k, &surfaces[t as usize], m as usize) {
-                    candidates.push((score, s as u32, t, corners));
+    for &(from, to, s, k) in &edges {
+        // The triangles running the other way along this edge.
+        let first = edges.partition_point(|e| (e.0, e.1) < (to, from));
+        for &(_, _, t, m) in edges[first..].iter().take_while(|e| (e.0, e.1) == (to, from)) {
+            if t > s {
+                if let Some((score, corners)) =
+                    quad_of(&surfaces[s as usize], k as usize, &surfaces[t as usize], m as usize)
+                {
+                    candidates.push((score, s, t, corners));
                 }
             }
         }
