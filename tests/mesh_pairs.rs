@@ -237,3 +237,37 @@ fn a_room_written_as_triangles_solves_like_the_room_written_as_quads() {
         assert!(relative < 1e-3, "face {face}: power {a} as a quad, {b} as triangles");
     }
 }
+
+#[test]
+fn the_textured_box_written_as_triangles_solves_like_the_box_written_as_quads() {
+    // The shipped textured box (picture, checker and wood maps with uv) with every quad written as the
+    // two triangles an exporter writes, uv and all: the pairs mesh to the quads' elements, whose
+    // texture means and solved exitance are the quads' own.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/rooms/textured_box.toml");
+    let mut quads = radray::scene::load(&path).expect("textured_box loads");
+    quads.radiosity.method = radray::scene::MethodChoice::Matrix;
+    let mut triangles = quads.clone();
+    triangles.surfaces = quads
+        .surfaces
+        .iter()
+        .flat_map(|s| {
+            assert_eq!(s.vertices.len(), 4);
+            [[0, 1, 2], [0, 2, 3]].map(|k| Surface {
+                vertices: k.iter().map(|&i| s.vertices[i]).collect(),
+                uvs: s.uvs.as_ref().map(|uv| k.iter().map(|&i| uv[i]).collect()),
+                shading_normals: s.shading_normals.as_ref().map(|n| k.iter().map(|&i| n[i]).collect()),
+                ..s.clone()
+            })
+        })
+        .collect();
+    assert!(quads.surfaces.iter().any(|s| s.uvs.is_some()), "textured");
+    let (q, t) = (Setup::solved(&quads), Setup::solved(&triangles));
+    let (eq, et) = (&q.mesh.elements, &t.mesh.elements);
+    assert_eq!(eq.len(), et.len());
+    for e in 0..eq.len() {
+        assert!((eq.centre[e] - et.centre[e]).length() < 1e-5, "element {e} in the same place");
+        assert!((eq.reflectance[e] - et.reflectance[e]).abs().max_element() < 1e-5, "element {e}'s texture mean");
+        let (bq, bt) = (q.solution.element_exitance[e], t.solution.element_exitance[e]);
+        assert!((bq - bt).abs().max_element() <= 1e-4 * bq.max_element().max(1e-3), "element {e}: {bq} against {bt}");
+    }
+}
