@@ -10,7 +10,7 @@ use glam::Vec3;
 use radray::mesh::Mesh;
 use radray::progress::Progress;
 use radray::radiosity::adaptive::criterion::{
-    across_concave_edges, elements_to_split, irradiance_variation, variation,
+    across_concave_edges, across_concave_edges_and_emitters, elements_to_split, irradiance_variation, variation,
 };
 use radray::radiosity::adaptive::hanging::{conform, conforming_vertex_values, hanging_vertices};
 use radray::radiosity::adaptive::subdivide::{split, EdgeMidpoints};
@@ -469,6 +469,40 @@ fn refinement_is_carried_across_a_concave_corner_and_nowhere_else() {
     // Elements too small to split (longest edge under twice the minimum) are left alone.
     let none = across_concave_edges(&mesh, &marked, 0.06, &vec![true; e.len()]);
     assert_eq!(none, marked);
+}
+
+/// A glowing wall standing on a floor (a lamp on a table): with nothing marked by the solution, the
+/// floor elements along the wall's foot are split, the emitter's own elements are not, and nothing else
+/// is. The same wall lifted off the floor (no concave edge) marks nothing.
+#[test]
+fn the_surface_at_an_emitters_foot_is_refined_beside_it() {
+    let emitting = |mut mesh: Mesh| {
+        for i in 0..mesh.elements.len() {
+            if mesh.elements.normal[i].x > 0.5 {
+                mesh.elements.emission[i] = Vec3::splat(10.0);
+            }
+        }
+        mesh
+    };
+    let wall = |y0: f32| {
+        let (a, b) = (Vec3::new(0.0, y0, 0.0), Vec3::new(0.0, y0, 1.0));
+        quad("lamp", [a, a + Vec3::Y, b + Vec3::Y, b])
+    };
+    let mesh = emitting(mesh_of(vec![floor(), wall(0.0)], 0.1));
+    let e = &mesh.elements;
+    let nothing = vec![false; e.len()];
+    let out = across_concave_edges_and_emitters(&mesh, &nothing, 0.01, &vec![true; e.len()]);
+    for (i, &marked) in out.iter().enumerate() {
+        let at_foot = e.normal[i].y > 0.5 && e.centre[i].x < 0.1;
+        assert_eq!(marked, at_foot, "element at {} (emitting: {})", e.centre[i], e.emission[i].x > 0.0);
+    }
+    assert_eq!(out.iter().filter(|&&s| s).count(), 10);
+    // The plain rule carries only what the solution marked.
+    assert_eq!(across_concave_edges(&mesh, &nothing, 0.01, &vec![true; e.len()]), nothing);
+    // Lifted by half a metre, the lamp's elements no longer touch the floor's.
+    let lifted = emitting(mesh_of(vec![floor(), wall(0.5)], 0.1));
+    let none = vec![false; lifted.elements.len()];
+    assert_eq!(across_concave_edges_and_emitters(&lifted, &none, 0.01, &vec![true; none.len()]), none);
 }
 
 /// Substructuring: the rows kept for unsplit elements share a split element's form factor among its

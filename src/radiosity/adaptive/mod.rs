@@ -285,7 +285,8 @@ impl PassOneMethod for Adaptive {
                 min_edge,
                 &splittable(&solved.mesh),
             );
-            let split = criterion::across_concave_edges(&solved.mesh, &split, min_edge, &splittable(&solved.mesh));
+            let split =
+                criterion::across_concave_edges_and_emitters(&solved.mesh, &split, min_edge, &splittable(&solved.mesh));
             let count = split.iter().filter(|&&s| s).count();
             let over_limit = solved.mesh.elements.len() as u64 + 3 * count as u64 > crate::run::MAX_ELEMENTS;
             if count == 0 || over_limit {
