@@ -531,3 +531,37 @@ fn kept_rows_conserve_each_rows_sum() {
         }
     }
 }
+
+/// A linear solution B = 1 + 2x + 0.5z on a refined floor (a 10 × 10 grid, a band of elements split
+/// once and its middle split again, as two adaptive levels leave it) comes back exactly at every
+/// vertex, the corners where coarse and fine elements meet included (f32 rounding: 1e-5). There the
+/// plain area mean is biased by the offset of its elements' weighted centroid from the vertex: a
+/// coarse element's centre lies twice as far as a fine one's and weighs four times as much, so the
+/// mean leans towards the coarse side by about 0.7 fine half-widths of the slope (the ridge along
+/// cornell_empty's refinement boundaries, docs/accuracy.md session 34).
+#[test]
+fn a_linear_solution_is_exact_at_every_vertex_of_a_refined_mesh() {
+    let coarse = floor_mesh(0.1);
+    let mut midpoints = EdgeMidpoints::default();
+    let band: Vec<bool> = coarse.elements.centre.iter().map(|c| (0.3..0.7).contains(&c.x)).collect();
+    let once = split(&coarse, &band, &mut midpoints);
+    let middle: Vec<bool> =
+        once.elements.centre.iter().map(|c| (0.4..0.6).contains(&c.x) && (0.3..0.7).contains(&c.z)).collect();
+    let mesh = split(&once, &middle, &mut midpoints);
+    let hanging = hanging_vertices(&mesh, &midpoints);
+    assert!(!hanging.is_empty(), "the refinement leaves T-vertices");
+    let b = |p: Vec3| Vec3::splat(1.0 + 2.0 * p.x + 0.5 * p.z);
+    let element: Vec<_> = mesh.elements.centre.iter().map(|&c| b(c).as_dvec3()).collect();
+    let vertex = conforming_vertex_values(&SmoothMesh::new(&mesh), &element, &hanging);
+    let mean = mesh.vertex_average(&element);
+    let inside = |p: Vec3| p.x > 0.01 && p.x < 0.99 && p.z > 0.01 && p.z < 0.99;
+    let hangs = |v: usize| hanging.iter().any(|h| h.vertex as usize == v);
+    let worst_mean = (0..mesh.positions.len())
+        .filter(|&v| inside(mesh.positions[v]) && !hangs(v))
+        .map(|v| (mean[v].as_vec3() - b(mesh.positions[v])).abs().max_element())
+        .fold(0.0, f32::max);
+    assert!(worst_mean > 0.01, "the plain mean is off at a corner inside the floor: {worst_mean}");
+    for (v, &p) in mesh.positions.iter().enumerate() {
+        assert!((vertex[v] - b(p)).abs().max_element() < 1e-5, "vertex at {p}: {} against {}", vertex[v], b(p));
+    }
+}

@@ -79,6 +79,11 @@ impl ElementMesh for LeafMesh {
         !(self.leaf_open_area[e] > 0.0)
     }
 
+    /// The weights are open areas (a leaf under an object resting on it weighs its open part).
+    fn weights_are_areas(&self) -> bool {
+        false
+    }
+
     /// Open-area-weighted means: a vertex on the edge of an object resting on the surface takes the
     /// open leaves' value, not the dark hidden ones'; a vertex with only hidden leaves around it takes
     /// their area-weighted mean.
