@@ -4,12 +4,11 @@
 
 use std::f32::consts::PI;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::mesh::Mesh;
 use crate::radiosity::adaptive::hanging::{conforming_vertex_values, hanging_vertices};
 use crate::radiosity::adaptive::subdivide::EdgeMidpoints;
-use crate::radiosity::boundary_vertices::vertex_values;
 use crate::radiosity::irradiance::element_irradiance;
 use crate::radiosity::smooth_mesh::SmoothMesh;
 use crate::radiosity::Solution;
@@ -62,8 +61,8 @@ pub fn vertex_irradiance(mesh: &Mesh, solution: &Solution) -> (Vec<Vec3>, Vec<Ve
     let total = element_irradiance(mesh, &solution.element_exitance, true);
     let direct = element_irradiance(mesh, &solution.element_direct_exitance, false);
     if solution.leaf_geometry.is_some() {
-        let boundary = vec![false; mesh.positions.len()];
-        return (vertex_values(mesh, &total, &boundary), vertex_values(mesh, &direct, &boundary));
+        let plain = |values: &[DVec3]| mesh.vertex_average(values).iter().map(|v| v.as_vec3()).collect();
+        return (plain(&total), plain(&direct));
     }
     // The element meshes (uniform, adaptive): the vertex step of their exitance, T-vertices included.
     let vertex_step = SmoothMesh::new(mesh);
