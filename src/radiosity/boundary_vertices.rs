@@ -6,9 +6,9 @@
 //! *Radiosity and Realistic Image Synthesis*, 1993, §9.2: nodal values at boundaries by extrapolation).
 //! Inside a surface the mean is corrected to first order where its elements do not sit symmetrically
 //! about the vertex (`centroid_correction`: refinement boundaries of the adaptive mesh, triangles beside
-//! quads), so a linear solution is exact at every vertex of any mesh. `vertex_values` is the one vertex-interpolation step of the element meshes: the uniform and adaptive
-//! `Mesh`, and the hierarchy's leaf mesh (`hierarchy::interpolate::LeafMesh`), each through
-//! `ElementMesh`.
+//! quads), so a linear solution is exact at every vertex of any mesh. `vertex_values` is the one
+//! vertex-interpolation step of the element meshes: the uniform and adaptive `Mesh`, and the
+//! hierarchy's leaf mesh (`hierarchy::interpolate::LeafMesh`), each through `ElementMesh`.
 
 use glam::{DMat3, DVec3, Vec3};
 
