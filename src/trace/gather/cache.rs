@@ -1,7 +1,8 @@
 //! The irradiance cache (Ward, Rubinstein and Clear 1988; Ward and Heckbert 1992): gathered records
 //! with their gradients, the error-bounded weights that decide which records may serve a point, and
-//! the interpolation between them, with the radii clamped to their neighbours' (Křivánek et al. 2006)
-//! so that no record reaches across a contact. Filled once before the image (`prepass`), read-only
+//! the interpolation between them, with the radii limited by the nearest surface seen (`near_radius`)
+//! so that no record reaches into a concave edge, and clamped to their neighbours' (Křivánek et al.
+//! 2006) so that none reaches across a contact. Filled once before the image (`prepass`), read-only
 //! after, so that every lookup sums the same records in the same order whatever the thread count.
 
 use std::collections::HashMap;
@@ -68,6 +69,26 @@ pub struct IrradianceCache {
     min_radius: Vec<f32>,
 }
 
+/// A record's radius is at most this many times the nearest surface its gather saw within 60° of the
+/// normal (`HemisphereEstimate::near_distance`); see `near_radius`.
+pub const NEAR_RADIUS_RATIO: f32 = 2.0;
+
+/// R = min(R_harmonic, 2·r_near): Ward's harmonic mean distance, limited by the nearest surface seen.
+///
+/// The harmonic mean is dominated by the open half of the hemisphere wherever a wall stands on one
+/// side: a point x from a wall sees it in half its hemisphere at distance x/(sin θ cos φ), so
+/// 1/R = (1/π)∫ cos θ sin θ cos φ / x dω = 2/(3πx) and R = 3πx/2 ≈ 4.7x. A record there reaches
+/// a·R ≈ 1.2x at a = 0.25: past the corner, where the irradiance bends down within a few x (a darker
+/// wall fills ever more of the hemisphere), and its linear extrapolation overshoots (the Cornell box's
+/// ceiling beside the back wall came out up to 3.5% bright). Beside a wall r_near ≈ x/sin 60°, so
+/// the limit gives R ≈ 2.3x and a reach of 0.58x at a = 0.25. Measured on the final images at
+/// default settings (docs/accuracy.md, session 35): relMSE −15% cornell_box, −28% cornell_empty,
+/// −34% l_room, −36% rotunda (with 44% less CPU: fewer samples left uncovered), −1 to −10% on the
+/// other rooms. A ratio of 1.5 gained another 1–8% for 8–16% more CPU.
+pub fn near_radius(estimate: &HemisphereEstimate) -> f32 {
+    estimate.harmonic_distance.min(NEAR_RADIUS_RATIO * estimate.near_distance)
+}
+
 /// A record spans at most this many cells per axis on its grid level.
 const MAX_CELLS_PER_AXIS: i32 = 4;
 /// Cell size ratio between grid levels.
@@ -108,9 +129,10 @@ impl IrradianceCache {
     }
 
     /// Adds the gather at (p, n); lookups see it after the next `index`. Its radius is the harmonic
-    /// mean distance, limited by the translation gradient (R ≤ E/|∇_t E|, Křivánek et al. 2005: the
-    /// linear extrapolation must not change the value by more than itself within R) and clamped to
-    /// [min_radius, max_radius] (scene units; the prepass sets them from the pixel footprint). Where
+    /// mean distance, limited to `NEAR_RADIUS_RATIO` times the nearest surface seen (`near_radius`)
+    /// and by the translation gradient (R ≤ E/|∇_t E|, Křivánek et al. 2005: the linear extrapolation
+    /// must not change the value by more than itself within R), and clamped to [min_radius,
+    /// max_radius] (scene units; the prepass sets them from the pixel footprint). Where
     /// the clamp raises R above E/|∇_t E| (a gather right against other geometry, whose nearest cells
     /// make the gradient huge), the gradient is scaled down to |∇_t E| = E/R, so that no extrapolation
     /// within the record's reach more than doubles or zeroes it.
@@ -122,7 +144,7 @@ impl IrradianceCache {
         min_radius: f32,
         max_radius: f32,
     ) {
-        let mut radius = estimate.harmonic_distance;
+        let mut radius = near_radius(&estimate);
         for c in 0..3 {
             let slope = estimate.translation_gradient[c].length();
             if slope > 0.0 && estimate.irradiance[c] > 0.0 {
@@ -273,6 +295,7 @@ mod tests {
         HemisphereEstimate {
             irradiance: Vec3::splat(irradiance),
             harmonic_distance: distance,
+            near_distance: distance,
             rotation_gradient: [Vec3::ZERO; 3],
             translation_gradient: [Vec3::ZERO; 3],
         }
@@ -302,6 +325,26 @@ mod tests {
         assert!((cache.records()[0].radius - 0.5).abs() < 1e-6, "R = min(4, 1/2)");
         let v = cache.lookup(Vec3::new(0.1, 0.0, 0.0), Vec3::Z).unwrap();
         assert!((v.x - 1.2).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_record_beside_a_wall_stops_well_short_of_it() {
+        // A gather x = 0.1 from a wall that fills half its hemisphere (`hemisphere`'s analytic case):
+        // the harmonic mean alone (3πx/2 ≈ 4.7x) would reach a·R ≈ 1.2x at a = 0.25, past the
+        // corner; limited to 2·r_near (r_near ≈ x/sin 60°) it reaches 0.58x.
+        use crate::trace::gather::hemisphere::{estimate, wall_beside, Strata};
+        let strata = Strata::for_rays(1024);
+        let x = 0.1f32;
+        let (l, r) = wall_beside(strata, x);
+        let e = estimate(strata, &l, &r, Vec3::Z);
+        assert!(e.harmonic_distance > 4.5 * x);
+        let mut cache = IrradianceCache::new(0.25);
+        cache.insert(Vec3::ZERO, Vec3::Z, e, 1e-4, 10.0);
+        cache.index();
+        let reach = 0.25 * cache.records()[0].radius;
+        assert!(reach < 0.6 * x, "reach {reach}");
+        assert!(cache.covers(Vec3::new(0.5 * x, 0.0, 0.0), Vec3::Z));
+        assert!(!cache.covers(Vec3::new(0.6 * x, 0.0, 0.0), Vec3::Z));
     }
 
     #[test]

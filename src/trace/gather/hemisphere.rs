@@ -1,6 +1,7 @@
 //! The stratified cosine-weighted hemisphere of a final gather and what its cells give: the irradiance,
-//! the harmonic mean distance of the surfaces seen, and Ward and Heckbert's (1992) rotation and
-//! translation gradients. Pure kernels over the cells' radiances and distances.
+//! the harmonic mean distance of the surfaces seen, the nearest surface seen within a cone about the
+//! normal, and Ward and Heckbert's (1992) rotation and translation gradients. Pure kernels over the
+//! cells' radiances and distances.
 
 use std::f32::consts::PI;
 
@@ -56,11 +57,20 @@ pub struct HemisphereEstimate {
     pub irradiance: Vec3,
     /// R = MN / Σ_jk 1/r_jk, the harmonic mean distance of the surfaces seen (infinite if none).
     pub harmonic_distance: f32,
+    /// r_near = min r_jk over the rings whose centre lies within `NEAR_CONE_COS` of the normal
+    /// (cos θ ≥ 1/2, θ ≤ 60°): the nearest surface seen, grazing directions left out (infinite if none).
+    pub near_distance: f32,
     /// ∇_r E per channel (world space): E(n') ≈ E + (n × n')·∇_r E.
     pub rotation_gradient: [Vec3; 3],
     /// ∇_t E per channel (world space): E(p') ≈ E + (p' − p)·∇_t E.
     pub translation_gradient: [Vec3; 3],
 }
+
+/// The cone of `HemisphereEstimate::near_distance`: rings whose centre direction has cos θ at least
+/// this. Grazing rays are left out because on a concave curved surface (a vault, a dome) they hit the
+/// surface itself a small fraction of its radius away, where the irradiance does not change: over all
+/// rings the vault_hall's records came out 82% more numerous for 4% less error (session 35).
+pub const NEAR_CONE_COS: f32 = 0.5;
 
 /// Gives the cells a gather did not trace (`traced[c]` false: below the facet's plane, see
 /// `Tracer::gather`) the traced cells' mean radiance, L_c = (1/T) Σ_traced L, and their harmonic mean
@@ -92,6 +102,8 @@ pub fn fill_untraced(radiance: &mut [Vec3], distance: &mut [f32], traced: &[bool
 /// (infinite where a ray left the scene), in the frame (t, b, n) of the normal n:
 ///
 /// - E = π/(MN) Σ L_jk;
+/// - r_near = min r_jk over the rings j with cos θ_j ≥ `NEAR_CONE_COS` at the ring's centre,
+///   sin²θ_j = (j + ½)/M;
 /// - ∇_r E = Σ_k v_k (2π/N) Σ_j w_j L_jk, v_k = −sin φ_k t + cos φ_k b at the sector's centre and
 ///   w_j = ∫ sin²θ dθ over the ring = [θ/2 − sin 2θ/4] between its edges (from ∇_r E = ∫ L (n × ω) dω:
 ///   a rotation tilts the cosine lobe; Ward and Heckbert's π/(MN)·tan θ_j is the midpoint rule of the
@@ -113,6 +125,8 @@ pub fn estimate(strata: Strata, radiance: &[Vec3], distance: &[f32], normal: Vec
     let ring_weight: Vec<f32> =
         (0..m).map(|j| antiderivative(ring_edge_sin(j + 1).asin()) - antiderivative(ring_edge_sin(j).asin())).collect();
     let mut irradiance = Vec3::ZERO;
+    let mut near_distance = f32::INFINITY;
+    let near_rings = (0..m).take_while(|&j| (j as f32 + 0.5) / m as f32 <= 1.0 - NEAR_CONE_COS * NEAR_CONE_COS).count();
     let mut inverse_distance_sum = 0.0f32;
     let mut rotation = [Vec3::ZERO; 3];
     let mut translation = [Vec3::ZERO; 3];
@@ -130,6 +144,9 @@ pub fn estimate(strata: Strata, radiance: &[Vec3], distance: &[f32], normal: Vec
             let l = radiance[cell(j, k)];
             let r = distance[cell(j, k)];
             irradiance += l;
+            if j < near_rings && r > 0.0 {
+                near_distance = near_distance.min(r);
+            }
             if r.is_finite() && r > 0.0 {
                 inverse_distance_sum += 1.0 / r;
             }
@@ -160,6 +177,7 @@ pub fn estimate(strata: Strata, radiance: &[Vec3], distance: &[f32], normal: Vec
         } else {
             f32::INFINITY
         },
+        near_distance,
         rotation_gradient: rotation,
         translation_gradient: translation,
     }
@@ -192,6 +210,22 @@ pub fn relative_error(strata: Strata, radiance: &[Vec3]) -> f32 {
     } else {
         0.0
     }
+}
+
+/// Cells (radiance 1 and the hit distance) of a gather at the origin with normal +z, beside a wall x
+/// away that fills the half of its hemisphere towards +x, nothing elsewhere: the analytic case of
+/// the harmonic and the near distance.
+#[cfg(test)]
+pub(crate) fn wall_beside(strata: Strata, x: f32) -> (Vec<Vec3>, Vec<f32>) {
+    let (mut l, mut r) = (Vec::new(), Vec::new());
+    for j in 0..strata.rings {
+        for k in 0..strata.sectors {
+            let d = strata.direction(j, k, 0.5, 0.5);
+            l.push(Vec3::ONE);
+            r.push(if d.x > 0.0 { x / d.x } else { f32::INFINITY });
+        }
+    }
+    (l, r)
 }
 
 #[cfg(test)]
@@ -266,6 +300,22 @@ mod tests {
         l[7] = Vec3::splat(1.0 + b);
         let expected = b / (cells as f32 + b);
         assert!((relative_error(strata, &l) - expected).abs() < 1e-6);
+    }
+
+    /// A point x from an infinite wall that fills the half of its hemisphere towards +x (nothing
+    /// elsewhere): the wall lies x/(sin θ cos φ) away, so the harmonic mean distance is
+    /// R = π / ∫ cos θ sin θ cos φ / x dω = 3πx/2, and the nearest point seen within 60° of the normal
+    /// is x/sin 60° (to the cells' discretisation).
+    #[test]
+    fn a_wall_beside_the_point_sets_the_harmonic_and_the_near_distance() {
+        let strata = Strata::for_rays(4096);
+        let x = 0.2f32;
+        let (l, r) = wall_beside(strata, x);
+        let e = estimate(strata, &l, &r, Vec3::Z);
+        let harmonic = 3.0 * PI * x / 2.0;
+        assert!((e.harmonic_distance - harmonic).abs() < 0.01 * harmonic, "R = {}", e.harmonic_distance);
+        let near = x / (60f32).to_radians().sin();
+        assert!(e.near_distance >= near && e.near_distance < 1.03 * near, "r_near = {}", e.near_distance);
     }
 
     /// For L(ω) = 1 + ω_x the rotation gradient is exact: E(n') = π + ∫ω_x cos θ' dω' changes by
