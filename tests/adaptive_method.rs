@@ -13,6 +13,7 @@ use radray::radiosity::adaptive::criterion::{
     across_concave_edges, across_concave_edges_and_emitters, elements_to_split, irradiance_variation, variation,
 };
 use radray::radiosity::adaptive::hanging::{conform, conforming_vertex_values, hanging_vertices};
+use radray::radiosity::adaptive::shadow_boundaries::blocked_light_variation;
 use radray::radiosity::adaptive::subdivide::{split, EdgeMidpoints};
 use radray::radiosity::adaptive::substructure::{kept_rows, new_indices};
 use radray::radiosity::boundary_vertices::{boundary_vertices, vertex_values};
@@ -49,17 +50,21 @@ fn floor_mesh(edge: f32) -> Mesh {
 
 /// `surfaces` (all of material 0, diffuse 0.5) meshed uniformly at `edge`.
 fn mesh_of(surfaces: Vec<Surface>, edge: f32) -> Mesh {
-    let scene = SceneDescription {
+    Mesh::build(&scene_of(vec![Material::diffuse("floor", Vec3::splat(0.5))], surfaces), edge)
+}
+
+/// A scene of `materials` and `surfaces` with default settings, looking down at the floor.
+fn scene_of(materials: Vec<Material>, surfaces: Vec<Surface>) -> SceneDescription {
+    SceneDescription {
         path: "test".into(),
         camera: Camera { eye: Vec3::Y, look_at: Vec3::ZERO, up: Vec3::Z, vfov_deg: 40.0 },
         image: ImageSettings::default(),
         radiosity: RadiosityParams::default(),
         render: RenderParams::default(),
-        materials: vec![Material::diffuse("floor", Vec3::splat(0.5))],
+        materials,
         surfaces,
         warnings: Vec::new(),
-    };
-    Mesh::build(&scene, edge)
+    }
 }
 
 /// The furnace solved adaptively, one level, with a threshold so low that hemicube noise alone
@@ -563,5 +568,54 @@ fn a_linear_solution_is_exact_at_every_vertex_of_a_refined_mesh() {
     assert!(worst_mean > 0.01, "the plain mean is off at a corner inside the floor: {worst_mean}");
     for (v, &p) in mesh.positions.iter().enumerate() {
         assert!((vertex[v] - b(p)).abs().max_element() < 1e-5, "vertex at {p}: {} against {}", vertex[v], b(p));
+    }
+}
+
+/// A 2 × 2 floor (Kd 0.5) meshed into 0.5 m patches, a 0.1 m lamp 1 m above its centre line x = 1, and
+/// a 6 cm bar along z halfway up, whose shadow (x within about 6 cm of 1) falls on the patch corners at
+/// x = 1 and between every patch centre (0.25, 0.75, 1.25, 1.75).
+fn floor_under_a_barred_lamp() -> (SceneDescription, Mesh) {
+    let at = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let facing_down = |object: &str, x0: f32, x1: f32, y: f32, z0: f32, z1: f32, material: u32| Surface {
+        material,
+        ..quad(object, [at(x0, y, z0), at(x1, y, z0), at(x1, y, z1), at(x0, y, z1)])
+    };
+    let floor = quad("floor", [at(0.0, 0.0, 0.0), at(0.0, 0.0, 2.0), at(2.0, 0.0, 2.0), at(2.0, 0.0, 0.0)]);
+    let scene = scene_of(
+        vec![
+            Material::diffuse("floor", Vec3::splat(0.5)),
+            Material { emitted_radiance: Vec3::splat(10.0), ..Material::diffuse("lamp", Vec3::ZERO) },
+        ],
+        vec![
+            floor,
+            facing_down("lamp", 0.95, 1.05, 1.0, 0.95, 1.05, 1),
+            facing_down("bar", 0.97, 1.03, 0.5, -1.0, 3.0, 0),
+        ],
+    );
+    let mesh = Mesh::build(&scene, 0.5);
+    (scene, mesh)
+}
+
+#[test]
+fn a_shadow_between_the_patch_centres_is_found_at_their_corners() {
+    // The patches beside the shadow (a corner at x = 1) see the lamp blocked at that corner only: their
+    // blocked light spreads by about ρ·E_d there. The patches farther out see it at no corner: 0
+    // exactly. Every patch centre is lit alike, so the solution's own values show no shadow.
+    let (scene, mesh) = floor_under_a_barred_lamp();
+    let accel = radray::accel::Accel::build(&mesh.positions, &mesh.triangles);
+    let floor: Vec<usize> = (0..mesh.elements.len()).filter(|&e| mesh.elements.normal[e].y > 0.5).collect();
+    assert_eq!(floor.len(), 16);
+    let wanted: Vec<bool> = (0..mesh.elements.len()).map(|e| floor.contains(&e)).collect();
+    let spread = blocked_light_variation(&mesh, &scene.materials, &accel, &wanted, 1);
+    for &e in &floor {
+        let c = mesh.elements.centre[e];
+        // ρ·E_d at the shadow's centre: the lamp (L = 10, 0.1 × 0.1 m) 1 m straight up, E ≈ L·A/d².
+        let shadowed = 0.5 * 10.0 * 0.01;
+        println!("patch at ({}, {}): spread {} (ρ·E_d {shadowed})", c.x, c.z, spread[e]);
+        if (c.x - 1.0).abs() < 0.5 {
+            assert!(spread[e] > 0.5 * shadowed, "patch at x = {}: spread {}", c.x, spread[e]);
+        } else {
+            assert_eq!(spread[e], 0.0, "patch at x = {}", c.x);
+        }
     }
 }

@@ -32,16 +32,14 @@ use super::hierarchy::{
 use super::leaf_mesh::{self, LeafGeometry, LeafMeshBuild};
 use super::method::{MethodError, PassOne, PassOneMethod, Reuse};
 use super::resume::{self, Checkpointer, Resume, SceneKeys, Shard};
+use super::sampled_direct::sampled_direct_exitance;
 use super::solution::Solution;
 use super::stats::{PassOneStats, ResumeStats, SolveStats};
 use crate::accel::Accel;
 use crate::material::SceneTextures;
 use crate::mesh::Mesh;
 use crate::progress::Progress;
-use crate::rng::Pcg32;
 use crate::scene::{Material, Quality, SceneDescription, SolverKind};
-use crate::transport::emitters::Emitters;
-use crate::transport::hit::{leave_surface, offset_at};
 use crate::transport::photons::{trace_photons, RunPhotons};
 
 /// Shadow rays per leaf for the direct part of its exitance.
@@ -243,68 +241,6 @@ fn photons_message(sources: CausticSources) -> &'static str {
 /// The mesh of a loaded hierarchical solution (its leaf geometry), or `None` for a uniform one.
 pub fn mesh_of(scene: &SceneDescription, solution: &Solution, textures: Arc<SceneTextures>) -> Option<Mesh> {
     solution.leaf_geometry.as_ref().map(|g| leaf_mesh::build(scene, g, textures).mesh)
-}
-
-/// The direct part of each element's exitance, B_d,i = ρ_i·E_d(x_i), with the direct irradiance at
-/// its centre x_i estimated from `samples` shadow rays to points y_k stratified over the emitters
-/// (`Emitters::sample_from`: by power and area, by solid angle on an emitter close to x_i):
-///
-/// E_d(x) ≈ (1/K) Σ_k E_k cos θ_x cos θ_k / (π d_k² p_A(y_k)) · V(x, y_k)
-///
-/// (E_k the emitted exitance of the side of the emitter facing x). Each
-/// element has its own random stream, so the result does not depend on the thread count.
-pub fn sampled_direct_exitance(
-    mesh: &Mesh,
-    materials: &[Material],
-    accel: &Accel,
-    samples: u32,
-    seed: u64,
-) -> Vec<DVec3> {
-    let emitters = Emitters::new(mesh, materials);
-    let e = &mesh.elements;
-    if emitters.is_empty() || samples == 0 {
-        return vec![DVec3::ZERO; e.len()];
-    }
-    let diagonal = {
-        let (lo, hi) =
-            mesh.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-        (hi - lo).length()
-    };
-    let offset = diagonal * 1e-5;
-    (0..e.len())
-        .into_par_iter()
-        .map(|i| {
-            let rho = e.reflectance[i];
-            if rho.max_element() <= 0.0 {
-                return DVec3::ZERO;
-            }
-            let (n, origin) = (e.normal[i], leave_surface(e.centre[i], e.normal[i], offset));
-            let mut rng = Pcg32::new(seed ^ 0x6469_7265_6374, i as u64);
-            let mut irradiance = DVec3::ZERO;
-            for k in 0..samples {
-                let xi = (k as f32 + rng.next_f32()) / samples as f32;
-                let Some(sample) = emitters.sample_from(mesh, origin, xi, rng.next_f32()) else { break };
-                let to_light = sample.point - origin;
-                let dist2 = to_light.length_squared();
-                if !(dist2 > 0.0) {
-                    continue;
-                }
-                let dist = dist2.sqrt();
-                let w = to_light / dist;
-                let cos_here = n.dot(w);
-                let t = sample.triangle as usize;
-                let cos_front = -e.normal[mesh.triangle_element[t] as usize].dot(w);
-                let Some(emitter) = mesh.side_element(t, cos_front > 0.0) else { continue };
-                if cos_here <= 0.0 || accel.occluded(origin, w, dist - (dist * 1e-4).max(offset_at(sample.point, 0.0)))
-                {
-                    continue;
-                }
-                let g = cos_here * cos_front.abs() / (std::f32::consts::PI * dist2);
-                irradiance += (e.emission[emitter] * g * sample.inverse_density).as_dvec3();
-            }
-            rho.as_dvec3() * irradiance / samples as f64
-        })
-        .collect()
 }
 
 /// Hierarchical radiosity with clustering and adaptive subdivision (`radiosity::hierarchy`).

@@ -17,6 +17,7 @@ pub mod matrix;
 pub mod matrix_free;
 pub mod method;
 pub mod resume;
+pub mod sampled_direct;
 pub mod smooth_mesh;
 pub mod smoothing_groups;
 pub mod solution;

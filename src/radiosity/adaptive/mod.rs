@@ -2,7 +2,9 @@
 //! Greenberg, Immel and Brock 1986; Ashdown, *Radiosity: A Programmer's Perspective*, ch. 7). The
 //! scene is meshed into patches at `max_element_edge` and solved with hemicubes and the scene's
 //! solver; elements whose light varies across them (`criterion`: their irradiance, so that a
-//! texture's contrast does not count), and the elements facing them across concave edges, are split
+//! texture's contrast does not count; on the patches also the direct light shadow rays find blocked
+//! at some corners and not at others, `shadow_boundaries`), and the elements facing them across
+//! concave edges, are split
 //! into four (`subdivide`); the finer mesh is solved again, up to
 //! `adaptive_levels` times. Each level keeps the form-factor rows of the elements it did not split
 //! (`substructure`), so it draws hemicubes only for the new children. Boundary vertices are
@@ -17,6 +19,7 @@
 pub mod criterion;
 pub mod hanging;
 pub mod refinement;
+pub mod shadow_boundaries;
 pub mod subdivide;
 pub mod substructure;
 
@@ -31,6 +34,7 @@ use super::method::{
 use super::solution::Solution;
 use super::solver;
 use super::stats::PassOneStats;
+use crate::accel::Accel;
 use crate::mesh::Mesh;
 use crate::progress::{Progress, Verbosity};
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
@@ -40,8 +44,9 @@ use subdivide::EdgeMidpoints;
 
 /// Changes whenever the method refines or solves differently, so that a cached solution of an
 /// older revision is not taken for this one's (2: substructuring, extrapolated boundary vertices,
-/// refinement carried across concave edges; 3: the split criterion on irradiance).
-const REVISION: u64 = 3;
+/// refinement carried across concave edges; 3: the split criterion on irradiance; 4: shadow rays at
+/// the patches' corners).
+const REVISION: u64 = 4;
 
 /// Hemicube resolution the deciding levels never go below.
 const MIN_PROBE_RESOLUTION_PX: u32 = 32;
@@ -275,7 +280,21 @@ impl PassOneMethod for Adaptive {
             // The criterion reads the light (irradiance), not the exitance a texture modulates.
             let exitance = &solved.solution.element_exitance;
             let vertex_step = super::smooth_mesh::SmoothMesh::new(&solved.mesh);
-            let variation = criterion::irradiance_variation(&solved.mesh, exitance, &vertex_step, &solved.hanging);
+            let mut variation = criterion::irradiance_variation(&solved.mesh, exitance, &vertex_step, &solved.hanging);
+            if level == 0 {
+                // Shadows narrower than two patches, which the patches' centres miss.
+                let accel = Accel::build(&solved.mesh.positions, &solved.mesh.triangles);
+                let blocked = shadow_boundaries::blocked_light_variation(
+                    &solved.mesh,
+                    &scene.materials,
+                    &accel,
+                    &splittable(&solved.mesh),
+                    scene.radiosity.seed,
+                );
+                for (v, b) in variation.iter_mut().zip(blocked) {
+                    *v = v.max(b);
+                }
+            }
             let split = criterion::elements_to_split(
                 &solved.mesh,
                 exitance,
