@@ -1,6 +1,6 @@
 //! Shadow boundaries between an element's corners, found with shadow rays: a shadow that falls between
-//! the centres the solution is sampled at (a table's shadow cast by a lamp beside it, a window
-//! frame's bars) still splits the patches it crosses. The solution cannot show it: each element's
+//! the centres the solution is sampled at (living_room's coffee table, its shadow cast by the table
+//! lamp beside it) still splits the patches it crosses. The solution cannot show it: each element's
 //! exitance is its centre's and a vertex value is a mean of those, so a feature narrower than two
 //! elements is smoothed away before `criterion::irradiance_variation` can measure it. Used on the
 //! patches (level 0), where elements are largest; the levels below see with their own centres what the
