@@ -442,7 +442,9 @@ pub const DEFAULT_GATHER_REFINE_ERROR: f32 = 0.04;
 /// the default preset, 256², in one run (docs/accuracy.md, "A cheaper default preset"): 0.25 gives
 /// relMSE 0.00020–0.00022 in 17.4–18.2 CPU-s with seeds differing by 0.00011; 0.15 gave 0.00012–0.00013
 /// in 28.0–29.3 CPU-s (seeds 0.00011); 512 gather rays instead would cost as little but double the
-/// seed difference's cache part (0.00014).
+/// seed difference's cache part (0.00014). Measured again in session 35 with the records' radii
+/// limited by the nearest surface (`trace::gather::cache::near_radius`), final images of nine rooms:
+/// 0.35 is 9–45% worse for 3–15% less CPU, 0.2 is 2–13% better for 5–12% more.
 pub const DEFAULT_CACHE_ACCURACY: f32 = 0.25;
 
 /// Shadow rays per diffuse hit by default (`[render] light_samples` and the default preset). Was 4:
