@@ -13,6 +13,7 @@ use radray::radiosity::adaptive::criterion::{
     across_concave_edges, across_concave_edges_and_emitters, elements_to_split, irradiance_variation, variation,
 };
 use radray::radiosity::adaptive::hanging::{conform, conforming_vertex_values, hanging_vertices};
+use radray::radiosity::adaptive::reflectors::Reflectors;
 use radray::radiosity::adaptive::shadow_boundaries::blocked_light_variation;
 use radray::radiosity::adaptive::subdivide::{split, EdgeMidpoints};
 use radray::radiosity::adaptive::substructure::{kept_rows, new_indices};
@@ -575,6 +576,11 @@ fn a_linear_solution_is_exact_at_every_vertex_of_a_refined_mesh() {
 /// a 6 cm bar along z halfway up, whose shadow (x within about 6 cm of 1) falls on the patch corners at
 /// x = 1 and between every patch centre (0.25, 0.75, 1.25, 1.75).
 fn floor_under_a_barred_lamp() -> (SceneDescription, Mesh) {
+    floor_under_a_bar(Material { emitted_radiance: Vec3::splat(10.0), ..Material::diffuse("lamp", Vec3::ZERO) })
+}
+
+/// `floor_under_a_barred_lamp` with `panel` in the lamp's place (surface 1).
+fn floor_under_a_bar(panel: Material) -> (SceneDescription, Mesh) {
     let at = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     let facing_down = |object: &str, x0: f32, x1: f32, y: f32, z0: f32, z1: f32, material: u32| Surface {
         material,
@@ -582,13 +588,10 @@ fn floor_under_a_barred_lamp() -> (SceneDescription, Mesh) {
     };
     let floor = quad("floor", [at(0.0, 0.0, 0.0), at(0.0, 0.0, 2.0), at(2.0, 0.0, 2.0), at(2.0, 0.0, 0.0)]);
     let scene = scene_of(
-        vec![
-            Material::diffuse("floor", Vec3::splat(0.5)),
-            Material { emitted_radiance: Vec3::splat(10.0), ..Material::diffuse("lamp", Vec3::ZERO) },
-        ],
+        vec![Material::diffuse("floor", Vec3::splat(0.5)), panel],
         vec![
             floor,
-            facing_down("lamp", 0.95, 1.05, 1.0, 0.95, 1.05, 1),
+            facing_down("panel", 0.95, 1.05, 1.0, 0.95, 1.05, 1),
             facing_down("bar", 0.97, 1.03, 0.5, -1.0, 3.0, 0),
         ],
     );
@@ -606,7 +609,9 @@ fn a_shadow_between_the_patch_centres_is_found_at_their_corners() {
     let floor: Vec<usize> = (0..mesh.elements.len()).filter(|&e| mesh.elements.normal[e].y > 0.5).collect();
     assert_eq!(floor.len(), 16);
     let wanted: Vec<bool> = (0..mesh.elements.len()).map(|e| floor.contains(&e)).collect();
-    let spread = blocked_light_variation(&mesh, &scene.materials, &accel, &wanted, 1);
+    // Only the lamp lights the floor: no element reflects anything yet.
+    let unlit = mesh.elements.emission.clone();
+    let spread = blocked_light_variation(&mesh, &scene.materials, &unlit, &accel, &wanted, 1);
     for &e in &floor {
         let c = mesh.elements.centre[e];
         // ρ·E_d at the shadow's centre: the lamp (L = 10, 0.1 × 0.1 m) 1 m straight up, E ≈ L·A/d².
@@ -618,4 +623,59 @@ fn a_shadow_between_the_patch_centres_is_found_at_their_corners() {
             assert_eq!(spread[e], 0.0, "patch at x = {}", c.x);
         }
     }
+}
+
+#[test]
+fn a_shadow_of_reflected_light_between_the_patch_centres_is_found_at_their_corners() {
+    // The lamp of the test above made a reflector: a white panel that emits nothing and reflects the
+    // exitance B = π·10 (a ceiling lit from below). No emitter, so only the rays to the reflecting
+    // elements can find the bar's shadow; they find it as the lamp's.
+    let (scene, mesh) = floor_under_a_bar(Material::diffuse("panel", Vec3::ONE));
+    let accel = radray::accel::Accel::build(&mesh.positions, &mesh.triangles);
+    let panel = |e: usize| mesh.elements.surface[e] == 1;
+    let exitance: Vec<Vec3> = (0..mesh.elements.len())
+        .map(|e| if panel(e) { Vec3::splat(std::f32::consts::PI * 10.0) } else { Vec3::ZERO })
+        .collect();
+    let floor: Vec<usize> = (0..mesh.elements.len()).filter(|&e| mesh.elements.normal[e].y > 0.5).collect();
+    assert_eq!(floor.len(), 16);
+    let wanted: Vec<bool> = (0..mesh.elements.len()).map(|e| floor.contains(&e)).collect();
+    let spread = blocked_light_variation(&mesh, &scene.materials, &exitance, &accel, &wanted, 1);
+    let shadowed = 0.5 * 10.0 * 0.01; // ρ·B·A/(π d²), as the lamp's
+    for &e in &floor {
+        let x = mesh.elements.centre[e].x;
+        if (x - 1.0).abs() < 0.5 {
+            assert!(spread[e] > 0.5 * shadowed, "patch at x = {x}: spread {}", spread[e]);
+        } else {
+            assert_eq!(spread[e], 0.0, "patch at x = {x}");
+        }
+    }
+}
+
+#[test]
+fn the_reflected_light_a_wall_blocks_is_the_point_to_polygon_form_factor() {
+    // A point 1 m under a 1 m reflecting square (B = 2), a slab between them hiding all of it: the
+    // blocked irradiance is all the square sends, B·F(point → square), F Lambert's exact form factor.
+    let at = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let square = [at(-0.5, 1.0, -0.5), at(0.5, 1.0, -0.5), at(0.5, 1.0, 0.5), at(-0.5, 1.0, 0.5)];
+    let slab = [at(-2.0, 0.5, -2.0), at(2.0, 0.5, -2.0), at(2.0, 0.5, 2.0), at(-2.0, 0.5, 2.0)];
+    let scene = scene_of(vec![Material::diffuse("white", Vec3::ONE)], vec![quad("square", square), quad("slab", slab)]);
+    let mesh = Mesh::build(&scene, 0.25);
+    let accel = radray::accel::Accel::build(&mesh.positions, &mesh.triangles);
+    let exitance: Vec<Vec3> = (0..mesh.elements.len())
+        .map(|e| if mesh.elements.surface[e] == 0 { Vec3::splat(2.0) } else { Vec3::ZERO })
+        .collect();
+    let reflectors = Reflectors::new(&mesh, &exitance).expect("the square reflects");
+    let points = reflectors.draw(&mesh, 4096, &mut radray::rng::Pcg32::new(7, 0));
+    let x = at(0.1, 0.0, 0.2);
+    let blocked = reflectors.blocked_irradiance(&mesh, &accel, x, Vec3::Y, &points);
+    let exact = 2.0 * point_to_polygon(x, Vec3::Y, &square) as f32;
+    assert!((blocked.x / exact - 1.0).abs() < 0.02, "blocked {} against B·F {exact}", blocked.x);
+    // Without the slab nothing is blocked.
+    let open = scene_of(vec![Material::diffuse("white", Vec3::ONE)], vec![quad("square", square)]);
+    let mesh = Mesh::build(&open, 0.25);
+    let accel = radray::accel::Accel::build(&mesh.positions, &mesh.triangles);
+    let exitance = vec![Vec3::splat(2.0); mesh.elements.len()];
+    let reflectors = Reflectors::new(&mesh, &exitance).expect("the square reflects");
+    let points = reflectors.draw(&mesh, 256, &mut radray::rng::Pcg32::new(7, 0));
+    assert_eq!(reflectors.blocked_irradiance(&mesh, &accel, x, Vec3::Y, &points), Vec3::ZERO);
 }

@@ -2,8 +2,9 @@
 //! Greenberg, Immel and Brock 1986; Ashdown, *Radiosity: A Programmer's Perspective*, ch. 7). The
 //! scene is meshed into patches at `max_element_edge` and solved with hemicubes and the scene's
 //! solver; elements whose light varies across them (`criterion`: their irradiance, so that a
-//! texture's contrast does not count; on the patches also the direct light shadow rays find blocked
-//! at some corners and not at others, `shadow_boundaries`), and the elements facing them across
+//! texture's contrast does not count; on the patches also the light of emitters and of bright
+//! reflectors that shadow rays find blocked at some corners and not at others, `shadow_boundaries`),
+//! and the elements facing them across
 //! concave edges, are split
 //! into four (`subdivide`); the finer mesh is solved again, up to
 //! `adaptive_levels` times. Each level keeps the form-factor rows of the elements it did not split
@@ -19,6 +20,7 @@
 pub mod criterion;
 pub mod hanging;
 pub mod refinement;
+pub mod reflectors;
 pub mod shadow_boundaries;
 pub mod subdivide;
 pub mod substructure;
@@ -45,8 +47,8 @@ use subdivide::EdgeMidpoints;
 /// Changes whenever the method refines or solves differently, so that a cached solution of an
 /// older revision is not taken for this one's (2: substructuring, extrapolated boundary vertices,
 /// refinement carried across concave edges; 3: the split criterion on irradiance; 4: shadow rays at
-/// the patches' corners).
-const REVISION: u64 = 4;
+/// the patches' corners; 5: those rays also to the reflecting elements).
+const REVISION: u64 = 5;
 
 /// Hemicube resolution the deciding levels never go below.
 const MIN_PROBE_RESOLUTION_PX: u32 = 32;
@@ -287,6 +289,7 @@ impl PassOneMethod for Adaptive {
                 let blocked = shadow_boundaries::blocked_light_variation(
                     &solved.mesh,
                     &scene.materials,
+                    exitance,
                     &accel,
                     &splittable(&solved.mesh),
                     scene.radiosity.seed,
