@@ -2,8 +2,11 @@
 //! with the mesh refined (and its unsplit rows kept, substructuring), the refinement criterion splits
 //! along a shadow boundary and nowhere else and is carried across concave corners, a hanging vertex
 //! takes its edge's interpolated value (no T-vertex cracks), and boundary vertices are extrapolated
-//! (exact on a linear solution, near Lambert's value beside a wall lamp).
+//! (exact on a linear solution, near Lambert's value beside a wall lamp). A refined level's hemicube
+//! draws a far split patch whole and shares its form factor among the leaves by area; near, it draws
+//! the leaves, bit for bit as without that cut.
 
+use std::ops::Range;
 use std::path::Path;
 
 use glam::Vec3;
@@ -18,7 +21,10 @@ use radray::radiosity::adaptive::shadow_boundaries::blocked_light_variation;
 use radray::radiosity::adaptive::subdivide::{split, EdgeMidpoints};
 use radray::radiosity::adaptive::substructure::{kept_rows, new_indices};
 use radray::radiosity::boundary_vertices::{boundary_vertices, vertex_values};
+use radray::radiosity::form_factors::ElementHierarchy;
+use radray::radiosity::hemicube::{Hemicube, ItemBuffer};
 use radray::radiosity::hierarchy::form_factor::point_to_polygon;
+use radray::radiosity::matrix::patch_cut::{PatchCut, FAR_PATCH_RADIUS_PX};
 use radray::radiosity::matrix::FormFactors;
 use radray::radiosity::smooth_mesh::SmoothMesh;
 use radray::run::{self, RunStats};
@@ -678,4 +684,91 @@ fn the_reflected_light_a_wall_blocks_is_the_point_to_polygon_form_factor() {
     let reflectors = Reflectors::new(&mesh, &exitance).expect("the square reflects");
     let points = reflectors.draw(&mesh, 256, &mut radray::rng::Pcg32::new(7, 0));
     assert_eq!(reflectors.blocked_irradiance(&mesh, &accel, x, Vec3::Y, &points), Vec3::ZERO);
+}
+
+/// A 0.1 m receiver square at the origin facing up, and a 1 m square at `height` above it facing down.
+fn receiver_under_a_square(height: f32) -> (Vec<Vec3>, Mesh) {
+    let at = Vec3::new;
+    let r = 0.05;
+    let receiver = [at(-r, 0.0, -r), at(-r, 0.0, r), at(r, 0.0, r), at(r, 0.0, -r)];
+    let source = [at(-0.5, height, -0.5), at(0.5, height, -0.5), at(0.5, height, 0.5), at(-0.5, height, 0.5)];
+    let white = vec![Material::diffuse("white", Vec3::splat(0.5))];
+    let scene = scene_of(white, vec![quad("receiver", receiver), quad("source", source)]);
+    (source.to_vec(), Mesh::build(&scene, 1.0))
+}
+
+/// The patches (one receiver, one source square) refined twice: the square into four, then one of its
+/// quarters into four again (leaves of two sizes), with each patch's leaves.
+fn refined(patches: &Mesh) -> (Mesh, Vec<Range<u32>>) {
+    assert_eq!(patches.elements.len(), 2);
+    let source = (0..2).find(|&e| patches.elements.normal[e].y < 0.0).unwrap();
+    let mut leaves: Vec<Range<u32>> = (0..2).map(|p| p..p + 1).collect();
+    let mut mesh = patches.clone();
+    let mut midpoints = EdgeMidpoints::default();
+    for _ in 0..2 {
+        // The first leaf of the square: the square itself, then its first quarter.
+        let chosen: Vec<bool> = (0..mesh.elements.len()).map(|e| e == leaves[source].start as usize).collect();
+        mesh = split(&mesh, &chosen, &mut midpoints);
+        let index = new_indices(&chosen);
+        for range in &mut leaves {
+            *range = index[range.start as usize].start..index[range.end as usize - 1].end;
+        }
+    }
+    assert_eq!(leaves[source].len(), 7);
+    (mesh, leaves)
+}
+
+/// The receiver's row of a refined `receiver_under_a_square`, with and without the far patches drawn
+/// whole (`radiosity::matrix::patch_cut`).
+struct Rows {
+    square: Vec<Vec3>,
+    mesh: Mesh,
+    with_cut: Vec<(u32, f32)>,
+    leaf_by_leaf: Vec<(u32, f32)>,
+}
+
+fn cut_rows(height: f32) -> Rows {
+    let (square, patches) = receiver_under_a_square(height);
+    let (mesh, leaves) = refined(&patches);
+    let receiver = (0..mesh.elements.len()).find(|&e| mesh.elements.normal[e].y > 0.0).unwrap();
+    let params = RadiosityParams::default();
+    let cut = PatchCut::new(&patches, &leaves, &mesh, params.hemicube_resolution_px);
+    assert_eq!(cut.len(), 1, "the square is the one split patch");
+    let hierarchy = ElementHierarchy::new(&mesh);
+    let hc = Hemicube::new(params.hemicube_resolution_px);
+    let mut buffers = ItemBuffer::new(&hc);
+    let (mut with_cut, mut leaf_by_leaf) = (Vec::new(), Vec::new());
+    hierarchy.element_row_cut(&mesh, &params, &hc, &mut buffers, receiver, Some(&cut), &mut with_cut);
+    hierarchy.element_row(&mesh, &params, &hc, &mut buffers, receiver, &mut leaf_by_leaf);
+    Rows { square, mesh, with_cut, leaf_by_leaf }
+}
+
+#[test]
+fn a_far_split_patch_is_drawn_whole_and_its_form_factor_shared_by_area() {
+    // 6 m away the square's radius (0.71 m) covers 128/2 · 0.71/6 ≈ 7.5 pixels: drawn whole.
+    let height = 6.0;
+    assert!(0.5f32.hypot(0.5) * 128.0 / 2.0 / height < FAR_PATCH_RADIUS_PX);
+    let Rows { square, mesh, with_cut, leaf_by_leaf } = cut_rows(height);
+    assert_eq!(with_cut.len(), 7, "every leaf gets a share: {with_cut:?}");
+    assert!(with_cut.windows(2).all(|w| w[0].0 < w[1].0), "columns ascending");
+    // Shared by area: F/A the same for every leaf.
+    let density: Vec<f32> = with_cut.iter().map(|&(j, f)| f / mesh.elements.area[j as usize]).collect();
+    for d in &density {
+        assert!((d / density[0] - 1.0).abs() < 1e-5, "F/A per leaf {density:?}");
+    }
+    // The leaves tile the patch exactly under the rasteriser's fill rule, so the whole patch wins the
+    // pixels its leaves win: the same sum. Both are Lambert's form factor within the hemicube's
+    // aliasing for a square 15 pixels across (2%).
+    let sum = |row: &[(u32, f32)]| row.iter().map(|&(_, f)| f64::from(f)).sum::<f64>();
+    assert!((sum(&with_cut) / sum(&leaf_by_leaf) - 1.0).abs() < 1e-6, "whole against leaf by leaf");
+    let exact = point_to_polygon(Vec3::new(0.0, 5e-5, 0.0), Vec3::Y, &square);
+    assert!((sum(&with_cut) / exact - 1.0).abs() < 0.02, "whole {} against exact {exact}", sum(&with_cut));
+}
+
+#[test]
+fn a_near_split_patch_is_drawn_leaf_by_leaf_as_without_the_cut() {
+    // 1 m away the square covers ≈ 45 pixels of radius: its leaves are drawn, bit for bit as before.
+    let Rows { with_cut, leaf_by_leaf, .. } = cut_rows(1.0);
+    assert_eq!(with_cut.len(), 7);
+    assert_eq!(with_cut, leaf_by_leaf);
 }

@@ -498,6 +498,7 @@ impl FullMatrix {
             selected: &|i| shard.selects(i),
             stop: &|| cancel.is_requested(),
             after_batch: Some(&mut after_batch),
+            cut: None,
         };
         let on_element_done = || {
             stage.inc(1);

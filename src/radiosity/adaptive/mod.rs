@@ -8,7 +8,10 @@
 //! concave edges, are split
 //! into four (`subdivide`); the finer mesh is solved again, up to
 //! `adaptive_levels` times. Each level keeps the form-factor rows of the elements it did not split
-//! (`substructure`), so it draws hemicubes only for the new children. Boundary vertices are
+//! (`substructure`), so it draws hemicubes only for the new children, and those hemicubes draw the
+//! split patches far from them whole, their form factor shared among the leaves by area
+//! (`matrix::patch_cut`), so a hemicube draws about as many polygons as there are patches plus the
+//! leaves near it. Boundary vertices are
 //! extrapolated from the elements inside (`boundary_vertices`) and a hanging vertex takes its edge's
 //! interpolated value (`hanging`), so the image has no T-vertex cracks. Every level is a plain
 //! row-independent matrix solve, so the bytes are the same at any thread count; light through
@@ -28,6 +31,7 @@ pub mod substructure;
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::matrix::patch_cut::PatchCut;
 use super::matrix::{form_factors, FormFactors, PartialRows, RowPlan};
 use super::method::{
     check_matrix_fits, form_factor_bytes_bound, specular_accel, specular_paths, MethodError, PassOne, PassOneMethod,
@@ -47,8 +51,9 @@ use subdivide::EdgeMidpoints;
 /// Changes whenever the method refines or solves differently, so that a cached solution of an
 /// older revision is not taken for this one's (2: substructuring, extrapolated boundary vertices,
 /// refinement carried across concave edges; 3: the split criterion on irradiance; 4: shadow rays at
-/// the patches' corners; 5: those rays also to the reflecting elements).
-const REVISION: u64 = 5;
+/// the patches' corners; 5: those rays also to the reflecting elements; 6: far split patches drawn
+/// whole by the refined levels' hemicubes).
+const REVISION: u64 = 6;
 
 /// Hemicube resolution the deciding levels never go below.
 const MIN_PROBE_RESOLUTION_PX: u32 = 32;
@@ -122,6 +127,7 @@ impl Adaptive {
         midpoints: &EdgeMidpoints,
         photons: Option<&RunPhotons>,
         kept: Option<&PartialRows>,
+        cut: Option<&PatchCut>,
         reused: Option<Arc<FormFactors>>,
         level: u32,
         full_resolution: bool,
@@ -157,7 +163,7 @@ impl Adaptive {
                     (Some(accel), Some(photons)) => Some(specular_paths(scene, &mesh, accel, photons)),
                     _ => None,
                 };
-                let plan = RowPlan { known: kept, selected: &|_| true, stop: &|| false, after_batch: None };
+                let plan = RowPlan { known: kept, selected: &|_| true, stop: &|| false, after_batch: None, cut };
                 let rows = form_factors::compute_planned(&mesh, &params, paths.as_ref(), plan, &|| stage.inc(1));
                 adaptive.rows_kept += kept.map_or(0, PartialRows::done_count);
                 adaptive.rows_computed += rows.done.len() - kept.map_or(0, PartialRows::done_count);
@@ -239,6 +245,9 @@ impl PassOneMethod for Adaptive {
         let mut stats =
             PassOneStats { hemicube_resolution_px: scene.radiosity.hemicube_resolution_px, ..Default::default() };
         let mut current = refinement::patch_mesh(scene, mesh.textures.clone());
+        // Each patch's leaves in the current level's mesh (contiguous: `substructure::new_indices`).
+        let patches = current.clone();
+        let mut leaves: Vec<std::ops::Range<u32>> = (0..patches.elements.len() as u32).map(|p| p..p + 1).collect();
         let specular = crate::radiosity::specular::mesh_has_specular(&current, &scene.materials);
         let min_edge = scene.radiosity.hierarchy.min_element_size.unwrap_or(scene.diagonal() / 200.0);
         let mut midpoints = EdgeMidpoints::default();
@@ -261,12 +270,16 @@ impl PassOneMethod for Adaptive {
             let cached = level_zero_key.and_then(|key| reuse.form_factors(key));
             reused_form_factors |= cached.is_some();
             let fresh = level_zero_key.filter(|_| cached.is_none());
+            // Hemicubes draw the split patches far from them whole (`PatchCut`).
+            let resolution_px = self.level_params(scene, full).hemicube_resolution_px;
+            let cut = (level > 0).then(|| PatchCut::new(&patches, &leaves, &current, resolution_px));
             let solved = self.solve_level(
                 scene,
                 current,
                 &midpoints,
                 with_photons,
                 kept.as_ref(),
+                cut.as_ref(),
                 cached,
                 level,
                 full,
@@ -325,6 +338,7 @@ impl PassOneMethod for Adaptive {
                     photons,
                     None,
                     None,
+                    None,
                     level,
                     true,
                     progress,
@@ -332,6 +346,10 @@ impl PassOneMethod for Adaptive {
                 )?;
             }
             current = refinement::split_level(&solved.mesh, &split, &mut midpoints);
+            let index = substructure::new_indices(&split);
+            for range in &mut leaves {
+                *range = index[range.start as usize].start..index[range.end as usize - 1].end;
+            }
             record.record(&split);
             kept = substructure.then(|| substructure::kept_rows(&solved.mesh, &solved.ff, &split, &current));
             level += 1;

@@ -7,6 +7,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
+use super::patch_cut::PatchCut;
 use super::PartialRows;
 use crate::mesh::Mesh;
 use crate::radiosity::hemicube::{BackItems, Hemicube, HemicubeFrame, ItemBuffer};
@@ -250,11 +251,30 @@ impl ElementHierarchy {
         i: usize,
         row: &mut Vec<(u32, f32)>,
     ) {
+        self.element_row_cut(mesh, params, hc, buffers, i, None, row);
+    }
+
+    /// `element_row`, with the split patches of `cut` that are far from the eye drawn whole, each
+    /// as one item whose form factor its leaves share by area (`PatchCut`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn element_row_cut(
+        &self,
+        mesh: &Mesh,
+        params: &RadiosityParams,
+        hc: &Hemicube,
+        buffers: &mut ItemBuffer,
+        i: usize,
+        cut: Option<&PatchCut>,
+        row: &mut Vec<(u32, f32)>,
+    ) {
         let e = &mesh.elements;
         let normal = e.normal[i];
         let eye = mesh.eye(i) + normal * eye_offset(e.area[i]);
         buffers.begin(hc, HemicubeFrame::new(eye, normal, hemicube_rotation_rad(params, i)));
         let backs = BackItems::past(e.len());
+        // Items of patches drawn whole come after the elements' and the two back items.
+        let first_patch_item = backs.refracting + 1;
+        let mut drawn_whole_until = 0usize;
         for chunk in &self.chunks {
             if let Some((n, offset)) = chunk.plane {
                 if chunk.two_sided && n.dot(eye) <= offset {
@@ -265,6 +285,25 @@ impl ElementHierarchy {
                 continue;
             }
             for j in chunk.elements.clone() {
+                if j < drawn_whole_until {
+                    continue; // a leaf of a patch drawn whole
+                }
+                if let Some(p) = cut.and_then(|c| c.drawn_whole(j, eye, i).map(|p| (c, p))) {
+                    let (cut, p) = p;
+                    drawn_whole_until = cut.leaves[p].end as usize;
+                    let corners = &cut.corners[p][..if cut.corners[p][3] == crate::mesh::NONE { 3 } else { 4 }];
+                    let occluder = if mesh.back_refracts(j) { backs.refracting } else { backs.opaque };
+                    buffers.add_indexed_polygon_or_occluder(
+                        hc,
+                        first_patch_item + p as u32,
+                        occluder,
+                        &mesh.positions,
+                        corners,
+                        cut.normal[p],
+                        cut.centre[p],
+                    );
+                    continue;
+                }
                 if j == i || mesh.hidden_from_hemicubes(j) {
                     continue;
                 }
@@ -286,11 +325,23 @@ impl ElementHierarchy {
                 }
             }
         }
+        let start = row.len();
+        let mut shared = false;
         buffers.finish(hc, |j, f| {
-            if !backs.contains(j) {
+            if j >= first_patch_item {
+                let Some(cut) = cut else { return };
+                let p = (j - first_patch_item) as usize;
+                for c in cut.leaves[p].clone() {
+                    row.push((c, (f * f64::from(e.area[c as usize] / cut.area[p])) as f32));
+                }
+                shared = true;
+            } else if !backs.contains(j) {
                 row.push((j, f as f32))
             }
         });
+        if shared {
+            row[start..].sort_unstable_by_key(|&(j, _)| j);
+        }
     }
 }
 
@@ -312,12 +363,15 @@ pub struct RowPlan<'a> {
     /// Sees the rows so far (a prefix of the matrix) after every batch, on one thread while the next
     /// batch is computed: the place to write a checkpoint.
     pub after_batch: Option<&'a mut (dyn FnMut(&PartialRows) + Send)>,
+    /// Split patches that hemicubes far from them draw whole (`PatchCut`); `None` draws every element.
+    /// Only for plain rows: extended form factors read the item buffer's elements.
+    pub cut: Option<&'a PatchCut>,
 }
 
 impl RowPlan<'_> {
     /// Every row, from scratch, to the end.
     pub fn all() -> RowPlan<'static> {
-        RowPlan { known: None, selected: &|_| true, stop: &|| false, after_batch: None }
+        RowPlan { known: None, selected: &|_| true, stop: &|| false, after_batch: None, cut: None }
     }
 }
 
@@ -394,6 +448,7 @@ fn compute_rows(
     rows.ff.row_start.push(0);
     let pool = BufferPool { hc: &hc, free: Mutex::new(Vec::new()) };
     let (known, selected, stop) = (plan.known, plan.selected, plan.stop);
+    let cut = plan.cut.filter(|_| specular.is_none());
     let compute_batch = |batch: std::ops::Range<usize>| -> Vec<ComputedRow> {
         batch
             .into_par_iter()
@@ -409,7 +464,7 @@ fn compute_rows(
                         let buffers = buffers.get();
                         let mut row = Vec::new();
                         let mut row_stats = SpecularStats::default();
-                        hierarchy.element_row(mesh, params, &hc, buffers, i, &mut row);
+                        hierarchy.element_row_cut(mesh, params, &hc, buffers, i, cut, &mut row);
                         if let Some(specular) = specular {
                             row.retain(|&(j, _)| !specular.is_pure_specular(j as usize));
                         }

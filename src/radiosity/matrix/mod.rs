@@ -5,6 +5,7 @@
 pub mod cost;
 pub mod form_factors;
 pub mod partial;
+pub mod patch_cut;
 pub mod rows_file;
 
 pub use form_factors::{FormFactors, RowPlan};
