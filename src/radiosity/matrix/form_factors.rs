@@ -288,17 +288,15 @@ impl ElementHierarchy {
                 if j < drawn_whole_until {
                     continue; // a leaf of a patch drawn whole
                 }
-                if let Some(p) = cut.and_then(|c| c.drawn_whole(j, eye, i).map(|p| (c, p))) {
-                    let (cut, p) = p;
+                if let Some((cut, p)) = cut.and_then(|c| c.drawn_whole(j, eye, i).map(|p| (c, p))) {
                     drawn_whole_until = cut.leaves[p].end as usize;
-                    let corners = &cut.corners[p][..if cut.corners[p][3] == crate::mesh::NONE { 3 } else { 4 }];
                     let occluder = if mesh.back_refracts(j) { backs.refracting } else { backs.opaque };
                     buffers.add_indexed_polygon_or_occluder(
                         hc,
                         first_patch_item + p as u32,
                         occluder,
                         &mesh.positions,
-                        corners,
+                        cut.outline(p),
                         cut.normal[p],
                         cut.centre[p],
                     );

@@ -70,6 +70,12 @@ impl PatchCut {
         cut
     }
 
+    /// Patch p's corner vertices, counter-clockwise: three or four.
+    pub fn outline(&self, p: usize) -> &[u32] {
+        let corners = &self.corners[p];
+        &corners[..if corners[3] == NONE { 3 } else { 4 }]
+    }
+
     /// Number of split patches.
     pub fn len(&self) -> usize {
         self.leaves.len()
