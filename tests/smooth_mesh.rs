@@ -204,3 +204,60 @@ fn a_sphere_with_a_sharp_terminator_stays_continuous() {
     assert!(largest_jump(&mesh, &per_surface) > 0.5, "the per-surface step jumps at the terminator");
     assert_eq!(largest_jump(&mesh, &smooth), 0.0, "one value per point across facet edges");
 }
+
+/// Largest distance of a vertex value (channel x) from `field` at the vertex.
+fn largest_error(mesh: &Mesh, values: &[Vec3], field: impl Fn(Vec3) -> f64) -> f64 {
+    mesh.positions.iter().zip(values).map(|(&p, v)| (v.x as f64 - field(p)).abs()).fold(0.0, f64::max)
+}
+
+#[test]
+fn strips_that_meet_at_t_junctions_read_each_others_slope() {
+    // A wall written as upright strips beside a stair: two coplanar strips 0.3 wide, the second
+    // starting a step higher, so that each one's corners lie inside the other's edge (T-junctions)
+    // and no edge is shared. Meshed at 0.4, each strip is one element wide: on its own, its elements
+    // have neighbours only along it, no slope across it, and the strip shows as a flat band.
+    let field = |p: Vec3| 1.0 + p.x as f64 + 0.3 * p.z as f64;
+    let mesh = mesh_of(vec![floor_piece(0.0, 0.3, 0.0, 3.0), floor_piece(0.3, 0.6, 0.25, 3.0)], 1, 0.4);
+    assert_eq!(mesh.elements.len(), 8 + 7, "one element across each strip");
+    let element: Vec<DVec3> = mesh.elements.centre.iter().map(|&c| DVec3::splat(field(c))).collect();
+    let smooth = SmoothMesh::new(&mesh);
+    assert_eq!(smooth.group_count(), 2, "strips meeting at T-junctions stay groups of their own");
+    let (per_surface, smooth_values) = both_steps(&mesh, &element);
+    // Flat across: off by the slope times half the width, 1 × 0.15.
+    assert!(largest_error(&mesh, &per_surface, field) > 0.12);
+    // Each element's fit reads the other strip's elements at the T-junctions: the linear field is
+    // exact at every vertex, on both sides of the shared line (f32 rounding of values near 1.5), but at
+    // the pair's outer corners, where the extrapolation's limit (half the neighbours' range beyond it)
+    // holds two strips' worth of slope back by a little.
+    let outer = |p: Vec3| (p.x == 0.0 || p.x == 0.6) && (p.z == 0.0 || p.z == 3.0);
+    for (v, &p) in mesh.positions.iter().enumerate() {
+        let error = (smooth_values[v].x as f64 - field(p)).abs();
+        assert!(error < if outer(p) { 0.02 } else { 1e-5 }, "vertex {p}: {} against {}", smooth_values[v].x, field(p));
+    }
+}
+
+#[test]
+fn a_shadow_edge_along_a_t_junction_keeps_its_step() {
+    // Two coplanar floor pieces meeting along x = 1 at T-junctions (the second shifted by 0.1 in z):
+    // lit on x < 1, in a sharp shadow on x > 1, each side linear in z. The fits do not read across a
+    // step: each side's own extrapolation to the line stands, as it did when the pieces knew nothing
+    // of each other.
+    let lit = |p: Vec3| 1.0 + 0.2 * p.z as f64;
+    let shadow = |p: Vec3| 0.1 + 0.02 * p.z as f64;
+    let mesh = mesh_of(vec![floor_piece(0.0, 1.0, 0.0, 1.0), floor_piece(1.0, 2.0, 0.1, 1.1)], 1, 0.25);
+    let element: Vec<DVec3> =
+        mesh.elements.centre.iter().map(|&c| DVec3::splat(if c.x < 1.0 { lit(c) } else { shadow(c) })).collect();
+    let (per_surface, smooth) = both_steps(&mesh, &element);
+    let side = |v: usize| {
+        mesh.elements
+            .corners
+            .iter()
+            .enumerate()
+            .any(|(e, c)| c.contains(&(v as u32)) && mesh.elements.centre[e].x < 1.0)
+    };
+    let expected = |v: usize| if side(v) { lit(mesh.positions[v]) } else { shadow(mesh.positions[v]) };
+    for (name, values) in [("per surface", &per_surface), ("smooth", &smooth)] {
+        let error = (0..mesh.positions.len()).map(|v| (values[v].x as f64 - expected(v)).abs()).fold(0.0, f64::max);
+        assert!(error < 1e-5, "{name}: largest error {error}");
+    }
+}

@@ -40,6 +40,23 @@ pub trait ElementMesh {
     fn weights_are_areas(&self) -> bool {
         true
     }
+    /// T-junctions between the pieces of one plane (`t_junctions`): (vertex, element) pairs where the
+    /// vertex lies inside one of the element's edges and is no vertex of the element's own surface.
+    /// Only the fits read them: the element counts the elements at those vertices as its neighbours,
+    /// and they count it. Means, extrapolation and pass two's interpolation keep to corners.
+    fn contacts(&self) -> &[(u32, u32)] {
+        &[]
+    }
+    /// The surface whose elements element e's fit reads (`surface`, or wider: pieces of one plane that
+    /// meet at T-junctions, `contacts`).
+    fn fit_surface(&self, e: usize) -> u32 {
+        self.surface(e)
+    }
+    /// Element e's fit reads neighbour n (on its fit surface), whose value is `values[n]`: always on
+    /// e's own surface; across a T-junction only where the two agree (no step lies on the junction).
+    fn fit_reads(&self, _e: usize, _n: usize, _values: &[Vec3]) -> bool {
+        true
+    }
     /// Interior vertex values: the `weight`-weighted mean of the unburied elements around each vertex
     /// (Gouraud), the mean of the buried ones where there are only those.
     fn vertex_mean(&self, element_values: &[DVec3]) -> Vec<DVec3>;
@@ -106,7 +123,36 @@ pub fn boundary_vertices<M: ElementMesh + ?Sized>(mesh: &M, midpoint: &dyn Fn(u3
             }
         }
     }
-    let mut boundary = vec![false; mesh.positions().len()];
+    once_used(uses, mesh.positions().len())
+}
+
+/// Per vertex: it lies on the boundary of its surface side, with every element edge cut at the
+/// vertices `inside(a, b)` lists strictly inside it (all of them, ordered from a to b; `None` for
+/// none): two pieces whose corners lie inside each other's edges then cut their shared line at the
+/// same points, and each piece of it is used twice.
+pub fn boundary_vertices_cut<M: ElementMesh + ?Sized>(
+    mesh: &M,
+    inside: &dyn Fn(u32, u32) -> Option<Vec<u32>>,
+) -> Vec<bool> {
+    let mut uses: rustc_hash::FxHashMap<(u32, u32), u32> = Default::default();
+    for e in 0..mesh.element_count() {
+        let c = mesh.corners(e);
+        let n = c.iter().take_while(|&&v| v != NONE).count();
+        for k in 0..n {
+            let (a, b) = (c[k], c[(k + 1) % n]);
+            let mut from = a;
+            for to in inside(a, b).unwrap_or_default().into_iter().chain(std::iter::once(b)) {
+                *uses.entry((from.min(to), from.max(to))).or_insert(0) += 1;
+                from = to;
+            }
+        }
+    }
+    once_used(uses, mesh.positions().len())
+}
+
+/// Per vertex (of `count`): it ends a segment of `uses` used once.
+fn once_used(uses: rustc_hash::FxHashMap<(u32, u32), u32>, count: usize) -> Vec<bool> {
+    let mut boundary = vec![false; count];
     for ((a, b), count) in uses {
         if count == 1 {
             boundary[a as usize] = true;
@@ -202,47 +248,66 @@ pub fn centroid_correction<M: ElementMesh + ?Sized>(
     }
 }
 
-/// The elements at each vertex, in increasing order, as one flat list: vertex v's are
-/// `elements[start[v]..start[v + 1]]`.
+/// The elements at each vertex, in increasing order, as flat lists: vertex v's are
+/// `elements[start[v]..start[v + 1]]`, those it is a corner of; `fit_*` the same with the elements whose
+/// edge it lies on (`ElementMesh::contacts`), for the fits; and each element's T-junction vertices,
+/// `touching[touch_start[e]..touch_start[e + 1]]`.
 struct ElementsAtVertex {
     start: Vec<u32>,
     elements: Vec<u32>,
+    fit_start: Vec<u32>,
+    fit_elements: Vec<u32>,
+    touch_start: Vec<u32>,
+    touching: Vec<u32>,
+}
+
+/// Pairs (key, item) as a flat list grouped by key (`count` keys): key k's items, in increasing order,
+/// are `items[start[k]..start[k + 1]]`.
+fn grouped(mut pairs: Vec<(u32, u32)>, count: usize) -> (Vec<u32>, Vec<u32>) {
+    pairs.sort_unstable();
+    pairs.dedup();
+    let mut start = vec![0u32; count + 1];
+    for &(k, _) in &pairs {
+        start[k as usize + 1] += 1;
+    }
+    for k in 0..count {
+        start[k + 1] += start[k];
+    }
+    (start, pairs.into_iter().map(|(_, item)| item).collect())
 }
 
 impl ElementsAtVertex {
     fn new<M: ElementMesh + ?Sized>(mesh: &M) -> Self {
-        let mut start = vec![0u32; mesh.positions().len() + 1];
-        for e in 0..mesh.element_count() {
-            for v in mesh.corners(e).into_iter().filter(|&v| v != NONE) {
-                start[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..mesh.positions().len() {
-            start[v + 1] += start[v];
-        }
-        let mut next = start.clone();
-        let mut elements = vec![0u32; start[mesh.positions().len()] as usize];
-        for e in 0..mesh.element_count() {
-            for v in mesh.corners(e).into_iter().filter(|&v| v != NONE) {
-                elements[next[v as usize] as usize] = e as u32;
-                next[v as usize] += 1;
-            }
-        }
-        ElementsAtVertex { start, elements }
+        let corners: Vec<(u32, u32)> = (0..mesh.element_count())
+            .flat_map(|e| mesh.corners(e).into_iter().filter(|&v| v != NONE).map(move |v| (v, e as u32)))
+            .collect();
+        let vertices = mesh.positions().len();
+        let with_contacts = corners.iter().chain(mesh.contacts()).copied().collect();
+        let (start, elements) = grouped(corners, vertices);
+        let (fit_start, fit_elements) = grouped(with_contacts, vertices);
+        let (touch_start, touching) =
+            grouped(mesh.contacts().iter().map(|&(v, e)| (e, v)).collect(), mesh.element_count());
+        ElementsAtVertex { start, elements, fit_start, fit_elements, touch_start, touching }
     }
 
-    /// The elements of element e's surface side that share a vertex with it (itself and buried
-    /// elements excluded: they are never seen and their values are not the surface's light), in
-    /// increasing order.
+    /// Element e's corners, then the vertices of other pieces on its edges.
+    fn vertices_of<M: ElementMesh + ?Sized>(&self, mesh: &M, e: usize) -> impl Iterator<Item = u32> + '_ {
+        let touching = &self.touching[self.touch_start[e] as usize..self.touch_start[e + 1] as usize];
+        mesh.corners(e).into_iter().filter(|&v| v != NONE).chain(touching.iter().copied())
+    }
+
+    /// The elements of element e's fit surface (`ElementMesh::fit_surface`) that share a vertex with it,
+    /// or touch it at a T-junction (itself and buried elements excluded: they are never seen and their
+    /// values are not the surface's light), in increasing order.
     fn neighbours<M: ElementMesh + ?Sized>(&self, mesh: &M, e: usize) -> Vec<u32> {
-        let surface = mesh.surface(e);
-        let mut around: Vec<u32> = mesh
-            .corners(e)
-            .into_iter()
-            .filter(|&v| v != NONE)
-            .flat_map(|v| self.elements[self.start[v as usize] as usize..self.start[v as usize + 1] as usize].iter())
+        let surface = mesh.fit_surface(e);
+        let mut around: Vec<u32> = self
+            .vertices_of(mesh, e)
+            .flat_map(|v| {
+                self.fit_elements[self.fit_start[v as usize] as usize..self.fit_start[v as usize + 1] as usize].iter()
+            })
             .copied()
-            .filter(|&n| n as usize != e && mesh.surface(n as usize) == surface && !mesh.buried(n as usize))
+            .filter(|&n| n as usize != e && mesh.fit_surface(n as usize) == surface && !mesh.buried(n as usize))
             .collect();
         around.sort_unstable();
         around.dedup();
@@ -265,7 +330,7 @@ fn linear_fit<M: ElementMesh + ?Sized>(
     let own = values[e].as_dvec3();
     let (mut m, mut r) = (DMat3::ZERO, DMat3::ZERO);
     let (mut lo, mut hi) = (own, own);
-    for &n in around {
+    for &n in around.iter().filter(|&&n| mesh.fit_reads(e, n as usize, values)) {
         let d = mesh.centre(n as usize).as_dvec3() - centre;
         let d = d - normal * d.dot(normal);
         let b = values[n as usize].as_dvec3();

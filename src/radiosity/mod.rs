@@ -25,6 +25,7 @@ pub mod solution_file;
 pub mod solver;
 pub mod specular;
 pub mod stats;
+pub mod t_junctions;
 
 pub use matrix::form_factors;
 pub use matrix::FormFactors;

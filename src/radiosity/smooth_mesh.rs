@@ -8,12 +8,18 @@
 //! vertex values do not change. Coplanar pieces of a group (a floor cut along furniture, a quad split
 //! into triangles) weld at a point only where their own values agree: a sharp shadow edge lying on
 //! their border stays a step (`SmoothMesh::vertex_values`); facets of a curved surface always weld.
+//! Pieces of one plane that meet at T-junctions instead of shared edges (a wall written as upright
+//! strips beside a stair, or as pieces round a door: `t_junctions`) stay groups of their own, but each
+//! element's linear fit reads its neighbours across the junction (`ElementMesh::fit_surface`,
+//! `contacts`), so that a strip one element wide still has a slope across it: without it, it shows as
+//! a flat band.
 
 use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
 
 use super::boundary_vertices::{self, ElementMesh};
 use super::smoothing_groups::{smoothing_groups, Facet};
+use super::t_junctions::{vertices_inside_edges, EdgeInside};
 use crate::mesh::{Mesh, NONE};
 
 /// Points closer than this fraction of the mesh's extent (per axis) are one point: the mesher puts the
@@ -173,9 +179,9 @@ pub struct SmoothMesh<'a> {
     welded: Vec<u32>,
     /// Per element: its smoothing group.
     group: Vec<u32>,
-    /// Per welded vertex: it lies on its group's outline (`boundary_vertices::boundary_vertices`, an
-    /// edge cut where a vertex of its group sits at its midpoint: the adaptive mesh's T-junctions, and
-    /// a facet edge that its neighbour's finer grid splits).
+    /// Per welded vertex: it lies on its group's outline (`boundary_vertices::boundary_vertices_cut`,
+    /// every edge cut at the vertices of its group inside it, `t_junctions`: the adaptive mesh's
+    /// T-junctions, a facet edge that its neighbour's finer grid splits).
     boundary: Vec<bool>,
     /// Per mesh vertex: it lies on its surface side's outline (the per-surface step's boundary, a split
     /// edge's midpoint, `Mesh::split_edge_midpoints`, not taken for one).
@@ -189,6 +195,13 @@ pub struct SmoothMesh<'a> {
     /// (its weight where the values of several pieces are averaged).
     vertex_normal: Vec<Vec3>,
     vertex_area: Vec<f64>,
+    /// T-junctions (`t_junctions`): (welded vertex, element) where the vertex lies inside one of the
+    /// element's edges, on a piece of the element's plane (`family`), and is no vertex of the element's
+    /// own surface (a split edge's midpoint is the adaptive mesh's own, `adaptive::hanging`).
+    contacts: Vec<(u32, u32)>,
+    /// Per element: its fit surface, the smoothing group joined with the groups of the pieces it meets
+    /// at T-junctions (`t_junction_families`).
+    family: Vec<u32>,
 }
 
 impl<'a> SmoothMesh<'a> {
@@ -201,22 +214,29 @@ impl<'a> SmoothMesh<'a> {
         let point: Vec<u32> = mesh.positions.iter().map(|&p| points.id(p)).collect();
         let outline = surface_outlines(mesh);
         let e = &mesh.elements;
-        let surface_group = smoothing_groups(mesh.surface_source.len(), |s| surface_facet(mesh, s, &outline, &point));
-        let group: Vec<u32> = e.surface.iter().map(|&s| surface_group[s as usize]).collect();
-        let mut vertex_group = vec![u32::MAX; mesh.positions.len()];
+        let facets: Vec<Facet<u32>> =
+            (0..mesh.surface_source.len()).map(|s| surface_facet(mesh, s, &outline, &point)).collect();
+        let surface_group = smoothing_groups(facets.len(), |s| facets[s]);
+        let mut vertex_surface = vec![u32::MAX; mesh.positions.len()];
         for (i, c) in e.corners.iter().enumerate() {
             for &v in c.iter().filter(|&&v| v != NONE) {
-                vertex_group[v as usize] = group[i];
+                vertex_surface[v as usize] = e.surface[i];
             }
         }
+        let t_junctions = vertices_inside_edges(&mesh.positions, &e.corners, |_, _| true);
+        let surface_family = t_junction_families(&surface_group, &facets, &t_junctions, &vertex_surface, &e.surface);
+        let family: Vec<u32> = e.surface.iter().map(|&s| surface_family[s as usize]).collect();
+        let vertex_family: Vec<u32> =
+            vertex_surface.iter().map(|&s| if s == u32::MAX { u32::MAX } else { surface_family[s as usize] }).collect();
+        let group: Vec<u32> = e.surface.iter().map(|&s| surface_group[s as usize]).collect();
+        let vertex_group: Vec<u32> =
+            vertex_surface.iter().map(|&s| if s == u32::MAX { u32::MAX } else { surface_group[s as usize] }).collect();
         let mut welded_of: FxHashMap<(u32, u32), u32> = FxHashMap::default();
         let mut positions = Vec::new();
-        let mut welded_group = Vec::new();
         let welded: Vec<u32> = (0..mesh.positions.len())
             .map(|v| {
                 *welded_of.entry((vertex_group[v], point[v])).or_insert_with(|| {
                     positions.push(mesh.positions[v]);
-                    welded_group.push(vertex_group[v]);
                     positions.len() as u32 - 1
                 })
             })
@@ -226,6 +246,39 @@ impl<'a> SmoothMesh<'a> {
         let surface_boundary = boundary_vertices::boundary_vertices(mesh, &|a, b| {
             mesh.split_edge_midpoints.get(&(a.min(b), a.max(b))).copied()
         });
+        // The welded vertices of each element's group inside each of its edges (the outline's cuts),
+        // and of its family (the T-junctions: vertices of no element of the edge's own surface).
+        let mut own_surface: rustc_hash::FxHashSet<(u32, u32)> = Default::default();
+        for (v, &w) in welded.iter().enumerate() {
+            own_surface.insert((w, vertex_surface[v]));
+        }
+        let mut inside: FxHashMap<(u32, u32), Vec<u32>> = FxHashMap::default();
+        let mut contacts = Vec::new();
+        for edge in &t_junctions {
+            let element = edge.element as usize;
+            let (a, b) = (welded[edge.ends.0 as usize], welded[edge.ends.1 as usize]);
+            let mut list: Vec<u32> = Vec::with_capacity(edge.inside.len());
+            for &v in &edge.inside {
+                let w = welded[v as usize];
+                if vertex_family[v as usize] != family[element] || w == a || w == b || list.contains(&w) {
+                    continue;
+                }
+                if vertex_group[v as usize] == group[element] {
+                    list.push(w);
+                }
+                if !own_surface.contains(&(w, e.surface[element])) {
+                    contacts.push((w, edge.element));
+                }
+            }
+            if !list.is_empty() {
+                if a > b {
+                    list.reverse();
+                }
+                inside.entry((a.min(b), a.max(b))).or_insert(list);
+            }
+        }
+        contacts.sort_unstable();
+        contacts.dedup();
         let mut smooth = SmoothMesh {
             mesh,
             positions,
@@ -238,13 +291,13 @@ impl<'a> SmoothMesh<'a> {
             seam_members,
             vertex_normal,
             vertex_area,
+            contacts,
+            family,
         };
-        let midpoint = |a: u32, b: u32| {
-            let mid = (smooth.positions[a as usize] + smooth.positions[b as usize]) * 0.5;
-            let m = *welded_of.get(&(welded_group[a as usize], points.find(mid)?))?;
-            (m != a && m != b).then_some(m)
-        };
-        let boundary = boundary_vertices::boundary_vertices(&smooth, &midpoint);
+        let boundary = boundary_vertices::boundary_vertices_cut(&smooth, &|a, b| {
+            let list = inside.get(&(a.min(b), a.max(b)))?;
+            Some(if a < b { list.clone() } else { list.iter().rev().copied().collect() })
+        });
         smooth.boundary = boundary;
         smooth
     }
@@ -317,6 +370,38 @@ impl<'a> SmoothMesh<'a> {
         groups.dedup();
         groups.len()
     }
+}
+
+/// Per mesh surface, its fit family: the smoothing groups (`surface_group`, per mesh surface: the
+/// smallest surface index of its group) joined where a vertex of one surface lies inside an edge of
+/// another (`t_junctions`) and their facets may be one smooth surface (`Facet::smooth_with`): the
+/// strips of a wall beside a stair, the pieces of a wall round a door. Named by their smallest surface.
+/// Only the fits read families. Welding them as groups too (the pieces' shared corners averaged and
+/// their T-junctions counted in the vertex means) gave stair_hall the same gain but made l_room 3%
+/// worse, at the corners where the pieces round its wall lamp meet the ceiling (docs/accuracy.md,
+/// session 38).
+fn t_junction_families(
+    surface_group: &[u32],
+    facets: &[Facet<u32>],
+    t_junctions: &[EdgeInside],
+    vertex_surface: &[u32],
+    element_surface: &[u32],
+) -> Vec<u32> {
+    let mut parent: Vec<u32> = surface_group.to_vec();
+    for edge in t_junctions {
+        let s = element_surface[edge.element as usize];
+        for &v in &edge.inside {
+            let t = vertex_surface[v as usize];
+            if t == s || t == u32::MAX || !facets[s as usize].smooth_with(&facets[t as usize]) {
+                continue;
+            }
+            let (rs, rt) = (root(&mut parent, s), root(&mut parent, t));
+            if rs != rt {
+                parent[rs.max(rt) as usize] = rs.min(rt);
+            }
+        }
+    }
+    (0..surface_group.len() as u32).map(|s| root(&mut parent, s)).collect()
 }
 
 /// Union-find root with path halving.
@@ -411,6 +496,21 @@ impl ElementMesh for SmoothMesh<'_> {
 
     fn buried(&self, e: usize) -> bool {
         self.mesh.element_buried.get(e).copied().unwrap_or(false)
+    }
+
+    fn contacts(&self) -> &[(u32, u32)] {
+        &self.contacts
+    }
+
+    fn fit_surface(&self, e: usize) -> u32 {
+        self.family[e]
+    }
+
+    /// Across a T-junction (another smoothing group of the family) only where the two elements' values
+    /// agree (`agree`, without the floor): a sharp shadow edge lying on the junction is not read as a
+    /// slope, and each side keeps its own extrapolation to it.
+    fn fit_reads(&self, e: usize, n: usize, values: &[Vec3]) -> bool {
+        self.group[e] == self.group[n] || agree(values[e], values[n], 0.0)
     }
 
     /// `Mesh::vertex_average` over the welded vertices: the area mean of the unburied elements around
