@@ -17,7 +17,7 @@ use radray::radiosity::adaptive::criterion::{
 };
 use radray::radiosity::adaptive::hanging::{conform, conforming_vertex_values, hanging_vertices};
 use radray::radiosity::adaptive::reflectors::Reflectors;
-use radray::radiosity::adaptive::shadow_boundaries::blocked_light_variation;
+use radray::radiosity::adaptive::shadow_boundaries::{blocked_light_variation, BlockedLightTest};
 use radray::radiosity::adaptive::subdivide::{split, EdgeMidpoints};
 use radray::radiosity::adaptive::substructure::{kept_rows, new_indices};
 use radray::radiosity::boundary_vertices::{boundary_vertices, vertex_values};
@@ -617,7 +617,8 @@ fn a_shadow_between_the_patch_centres_is_found_at_their_corners() {
     let wanted: Vec<bool> = (0..mesh.elements.len()).map(|e| floor.contains(&e)).collect();
     // Only the lamp lights the floor: no element reflects anything yet.
     let unlit = mesh.elements.emission.clone();
-    let spread = blocked_light_variation(&mesh, &scene.materials, &unlit, &accel, &wanted, 1);
+    let spread =
+        blocked_light_variation(&mesh, &scene.materials, &unlit, &accel, &wanted, 1, BlockedLightTest::CornerSpread);
     for &e in &floor {
         let c = mesh.elements.centre[e];
         // ρ·E_d at the shadow's centre: the lamp (L = 10, 0.1 × 0.1 m) 1 m straight up, E ≈ L·A/d².
@@ -629,6 +630,40 @@ fn a_shadow_between_the_patch_centres_is_found_at_their_corners() {
             assert_eq!(spread[e], 0.0, "patch at x = {}", c.x);
         }
     }
+}
+
+#[test]
+fn a_streak_between_the_corners_is_found_by_the_interpolation_error_not_by_the_spread() {
+    // One floor element 0.5 m square centred under the barred lamp (x from 0.75 to 1.25): the bar's
+    // shadow (x within about 6 cm of 1) crosses its middle and misses all four corners. The corners see
+    // no light blocked, so their spread is 0 exactly; the centre and the midpoints of the two edges
+    // across the shadow lie in it, fully blocked, so the interpolation error is ρ·E_d there.
+    let at = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let facing_down = |object: &str, x0: f32, x1: f32, y: f32, z0: f32, z1: f32, material: u32| Surface {
+        material,
+        ..quad(object, [at(x0, y, z0), at(x1, y, z0), at(x1, y, z1), at(x0, y, z1)])
+    };
+    let lamp = Material { emitted_radiance: Vec3::splat(10.0), ..Material::diffuse("lamp", Vec3::ZERO) };
+    let scene = scene_of(
+        vec![Material::diffuse("floor", Vec3::splat(0.5)), lamp],
+        vec![
+            quad("floor", [at(0.75, 0.0, 0.0), at(0.75, 0.0, 0.5), at(1.25, 0.0, 0.5), at(1.25, 0.0, 0.0)]),
+            facing_down("panel", 0.95, 1.05, 1.0, 0.2, 0.3, 1),
+            facing_down("bar", 0.97, 1.03, 0.5, -1.0, 2.0, 0),
+        ],
+    );
+    let mesh = Mesh::build(&scene, 0.5);
+    let accel = radray::accel::Accel::build(&mesh.positions, &mesh.triangles);
+    let wanted: Vec<bool> = (0..mesh.elements.len()).map(|e| mesh.elements.surface[e] == 0).collect();
+    assert_eq!(wanted.iter().filter(|&&w| w).count(), 1, "the floor is one element");
+    let floor = wanted.iter().position(|&w| w).unwrap();
+    let unlit = mesh.elements.emission.clone();
+    let variation = |test| blocked_light_variation(&mesh, &scene.materials, &unlit, &accel, &wanted, 1, test)[floor];
+    // ρ·E_d under the lamp (L = 10, 0.1 × 0.1 m, 1 m up): 0.5 · 10 · 0.01.
+    let shadowed = 0.5 * 10.0 * 0.01;
+    assert_eq!(variation(BlockedLightTest::CornerSpread), 0.0);
+    let error = variation(BlockedLightTest::Interpolation);
+    assert!((error / shadowed - 1.0).abs() < 0.2, "interpolation error {error} against ρ·E_d {shadowed}");
 }
 
 #[test]
@@ -645,7 +680,8 @@ fn a_shadow_of_reflected_light_between_the_patch_centres_is_found_at_their_corne
     let floor: Vec<usize> = (0..mesh.elements.len()).filter(|&e| mesh.elements.normal[e].y > 0.5).collect();
     assert_eq!(floor.len(), 16);
     let wanted: Vec<bool> = (0..mesh.elements.len()).map(|e| floor.contains(&e)).collect();
-    let spread = blocked_light_variation(&mesh, &scene.materials, &exitance, &accel, &wanted, 1);
+    let spread =
+        blocked_light_variation(&mesh, &scene.materials, &exitance, &accel, &wanted, 1, BlockedLightTest::CornerSpread);
     let shadowed = 0.5 * 10.0 * 0.01; // ρ·B·A/(π d²), as the lamp's
     for &e in &floor {
         let x = mesh.elements.centre[e].x;

@@ -2,8 +2,9 @@
 //! Greenberg, Immel and Brock 1986; Ashdown, *Radiosity: A Programmer's Perspective*, ch. 7). The
 //! scene is meshed into patches at `max_element_edge` and solved with hemicubes and the scene's
 //! solver; elements whose light varies across them (`criterion`: their irradiance, so that a
-//! texture's contrast does not count; on the patches also the light of emitters and of bright
-//! reflectors that shadow rays find blocked at some corners and not at others, `shadow_boundaries`),
+//! texture's contrast does not count; also the light of emitters and of bright reflectors that shadow
+//! rays find blocked at some corners and not at others on the patches, or not linear across the
+//! element on the level below, `shadow_boundaries`),
 //! and the elements facing them across
 //! concave edges, are split
 //! into four (`subdivide`); the finer mesh is solved again, up to
@@ -46,14 +47,16 @@ use crate::progress::{Progress, Verbosity};
 use crate::scene::{RadiosityParams, SceneDescription, SolverKind};
 use crate::transport::photons::RunPhotons;
 use refinement::Refinement;
+use shadow_boundaries::BlockedLightTest;
 use subdivide::EdgeMidpoints;
 
 /// Changes whenever the method refines or solves differently, so that a cached solution of an
 /// older revision is not taken for this one's (2: substructuring, extrapolated boundary vertices,
 /// refinement carried across concave edges; 3: the split criterion on irradiance; 4: shadow rays at
 /// the patches' corners; 5: those rays also to the reflecting elements; 6: far split patches drawn
-/// whole by the refined levels' hemicubes).
-const REVISION: u64 = 6;
+/// whole by the refined levels' hemicubes; 7: the blocked light's interpolation error on the levels
+/// below the patches).
+const REVISION: u64 = 7;
 
 /// Hemicube resolution the deciding levels never go below.
 const MIN_PROBE_RESOLUTION_PX: u32 = 32;
@@ -296,20 +299,21 @@ impl PassOneMethod for Adaptive {
             let exitance = &solved.solution.element_exitance;
             let vertex_step = super::smooth_mesh::SmoothMesh::new(&solved.mesh);
             let mut variation = criterion::irradiance_variation(&solved.mesh, exitance, &vertex_step, &solved.hanging);
-            if level == 0 {
-                // Shadows narrower than two patches, which the patches' centres miss.
-                let accel = Accel::build(&solved.mesh.positions, &solved.mesh.triangles);
-                let blocked = shadow_boundaries::blocked_light_variation(
-                    &solved.mesh,
-                    &scene.materials,
-                    exitance,
-                    &accel,
-                    &splittable(&solved.mesh),
-                    scene.radiosity.seed,
-                );
-                for (v, b) in variation.iter_mut().zip(blocked) {
-                    *v = v.max(b);
-                }
+            // Shadows narrower than two elements, which their centres miss: between the patches'
+            // corners; on the next level, where the children's corners do not interpolate them.
+            let test = if level == 0 { BlockedLightTest::CornerSpread } else { BlockedLightTest::Interpolation };
+            let accel = Accel::build(&solved.mesh.positions, &solved.mesh.triangles);
+            let blocked = shadow_boundaries::blocked_light_variation(
+                &solved.mesh,
+                &scene.materials,
+                exitance,
+                &accel,
+                &splittable(&solved.mesh),
+                scene.radiosity.seed,
+                test,
+            );
+            for (v, b) in variation.iter_mut().zip(blocked) {
+                *v = v.max(b);
             }
             let split = criterion::elements_to_split(
                 &solved.mesh,
