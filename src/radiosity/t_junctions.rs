@@ -1,9 +1,10 @@
 //! T-junctions: mesh vertices that lie inside another element's edge. Exporters write a wall beside a
 //! staircase as upright strips, one per step, and a wall round a door as pieces: neighbouring pieces
 //! of one plane whose corners lie inside each other's edges instead of meeting at shared corners.
-//! Found here, geometrically, so that the vertex step (`smooth_mesh`) can treat such pieces as one
-//! surface: without it each strip is a surface of its own, one element wide, whose fit across the strip
-//! has no neighbours and whose image is a flat band.
+//! Found here, geometrically, so that the vertex step (`smooth_mesh`) can fit each element across the
+//! junction, and cut its outline at every vertex inside an edge: without it each strip is a surface of
+//! its own, one element wide, whose fit across the strip has no neighbours and whose image is a flat
+//! band.
 
 use glam::Vec3;
 use rustc_hash::FxHashMap;

@@ -40,19 +40,20 @@ pub enum BlockedLightTest {
     /// The spread over its corners: δₑ = max_c ρ̄ₑ,c · (max_k Eᵇ_c(x_k) − min_k Eᵇ_c(x_k)), x_k the
     /// corners.
     CornerSpread,
-    /// The error of interpolating the corners: δₑ = max_c ρ̄ₑ,c · max_m |Eᵇ_c(y_m) − Ẽᵇ_c(y_m)| over the
-    /// edges' midpoints and the centre y_m, Ẽᵇ the corners' linear (triangle) or bilinear (quad)
+    /// The error of interpolating the corners: δₑ = max_c ρ̄ₑ,c · max_m |Eᵇ_c(y_m) − Ẽᵇ_c(y_m)| over
+    /// the edges' midpoints and the centre y_m, Ẽᵇ the corners' linear (triangle) or bilinear (quad)
     /// interpolation there: the mean of an edge's two ends at its midpoint, of all corners at the
     /// centre. 0 for a blocked light linear across the element, however steep.
     Interpolation,
 }
 
 /// Per element, how the light that shadow rays find blocked varies across it (`test`), in exitance
-/// units, with Eᵇ = Eᵇ_emitters + Eᵇ_reflectors at points pulled `CORNER_INSET` towards its centre. Eᵇ_emitters is the irradiance the
-/// emitters would add with nothing in the way (`direct_irradiance_at`'s `blocked`, `CORNER_SAMPLES`
-/// rays, the same random numbers at every corner of an element); Eᵇ_reflectors the same for the light
-/// the solution `element_exitance` reflects (`Reflectors::blocked_irradiance`, `REFLECTOR_SAMPLES`
-/// points drawn by reflected power, the same points for every corner): a ceiling lit by an uplighter
+/// units, with Eᵇ = Eᵇ_emitters + Eᵇ_reflectors at points pulled `CORNER_INSET` towards its centre.
+/// Eᵇ_emitters is the irradiance the emitters would add with nothing in the way
+/// (`direct_irradiance_at`'s `blocked`, `CORNER_SAMPLES` rays, the same random numbers at every point
+/// of an element); Eᵇ_reflectors the same for the light the solution `element_exitance` reflects
+/// (`Reflectors::blocked_irradiance`, `REFLECTOR_SAMPLES` points drawn by reflected power, the same
+/// points for every point of the element): a ceiling lit by an uplighter
 /// casts a table's shadow on the floor as a lamp does. The blocked part, not the light itself: an
 /// unshadowed falloff across a patch is smooth and the centres see it, while a change of visibility
 /// between two corners is a shadow boundary between them; where no corner is shadowed δ = 0 exactly.
