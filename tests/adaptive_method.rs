@@ -544,6 +544,35 @@ fn kept_rows_conserve_each_rows_sum() {
     }
 }
 
+#[test]
+fn kept_rows_share_a_split_elements_form_factor_among_its_open_children_only() {
+    // The receiver's hemicube saw only the open part of a patch that an object rests on; a buried
+    // child's share would gather light the receiver never saw. One child buried: the others take the
+    // whole form factor by their area, so each row's sum is still kept.
+    let coarse = floor_mesh(0.25);
+    let n = coarse.elements.len();
+    let rows: Vec<Vec<(u32, f32)>> = (0..n)
+        .map(|i| (0..n).filter(|&j| j != i).map(|j| (j as u32, (1 + i + 3 * j) as f32 / 1000.0)).collect())
+        .collect();
+    let ff = FormFactors::from_rows(rows);
+    let chosen: Vec<bool> = (0..n).map(|i| i == 5).collect();
+    let mut refined = split(&coarse, &chosen, &mut EdgeMidpoints::default());
+    let children = new_indices(&chosen)[5].clone();
+    refined.element_buried = vec![false; refined.elements.len()];
+    refined.element_buried[children.start as usize] = true;
+    let kept = kept_rows(&coarse, &ff, &chosen, &refined);
+    let open_area: f64 = children.clone().skip(1).map(|c| refined.elements.area[c as usize] as f64).sum();
+    for i in (0..n).filter(|&i| i != 5) {
+        let row = new_indices(&chosen)[i].start as usize;
+        assert!((kept.ff.row_sum(row) - ff.row_sum(i)).abs() < 1e-6, "row {i}");
+        assert_eq!(kept.ff.get(row, children.start as usize), 0.0, "the buried child gets no share");
+        for c in children.clone().skip(1) {
+            let expected = ff.get(i, 5) * refined.elements.area[c as usize] as f64 / open_area;
+            assert!((kept.ff.get(row, c as usize) - expected).abs() < 1e-7, "row {i}, child {c}");
+        }
+    }
+}
+
 /// A linear solution B = 1 + 2x + 0.5z on a refined floor (a 10 × 10 grid, a band of elements split
 /// once and its middle split again, as two adaptive levels leave it) comes back exactly at every
 /// vertex, the corners where coarse and fine elements meet included (f32 rounding: 1e-5). There the

@@ -55,8 +55,8 @@ use subdivide::EdgeMidpoints;
 /// refinement carried across concave edges; 3: the split criterion on irradiance; 4: shadow rays at
 /// the patches' corners; 5: those rays also to the reflecting elements; 6: far split patches drawn
 /// whole by the refined levels' hemicubes; 7: the blocked light's interpolation error on the levels
-/// below the patches).
-const REVISION: u64 = 7;
+/// below the patches; 8: kept rows share a split element's form factor among its open children).
+const REVISION: u64 = 8;
 
 /// Hemicube resolution the deciding levels never go below.
 const MIN_PROBE_RESOLUTION_PX: u32 = 32;

@@ -3,6 +3,11 @@
 //! A kept row saw each split element whole; its form factor to it is shared among the children by
 //! area, so the unsplit receiver gathers the split element's area-mean exitance, as the patch it saw
 //! — the patch-level interaction of substructuring — while the children gather from the refined mesh.
+//! Only the open children share it: the receiver's hemicube saw the patch's open part, since the part
+//! under an object resting on it was hidden by that object, and a buried child's exitance is not the
+//! light the receiver saw. Shared over all children, the buried ones' dark share was lost:
+//! fixture_room's radiosity view was 2% dark, cornell_box's floor under the boxes too (docs/accuracy.md,
+//! session 38).
 
 use std::ops::Range;
 
@@ -25,7 +30,9 @@ pub fn new_indices(split: &[bool]) -> Vec<Range<u32>> {
 
 /// The rows of `refined` (the split of `coarse` by `split`) that can be kept from `coarse_ff`: done for
 /// every element that was not split, with
-///   F'_{i c} = F_{i p} · A_c / A_p   for each child c of a split element p, F'_{i j'} = F_{i j} otherwise;
+///   F'_{i c} = F_{i p} · A_c / A_open(p)   for each open child c of a split element p (0 for a buried
+///   one; A_open the open children's area, A_p where every child is buried), F'_{i j'} = F_{i j}
+///   otherwise;
 /// the children's rows are left to compute (not done). Rows carry only plain entries: the caller keeps
 /// rows only when the scene has no mirrors or glass.
 pub fn kept_rows(coarse: &Mesh, coarse_ff: &FormFactors, split: &[bool], refined: &Mesh) -> PartialRows {
@@ -46,10 +53,14 @@ pub fn kept_rows(coarse: &Mesh, coarse_ff: &FormFactors, split: &[bool], refined
         for (&j, &f) in columns.iter().zip(values) {
             let to = index[j as usize].clone();
             if split[j as usize] {
-                let parent_area = coarse.elements.area[j as usize];
+                let buried = |c: u32| refined.element_buried.get(c as usize).copied().unwrap_or(false);
+                let area = |c: u32| refined.elements.area[c as usize];
+                let open_area: f32 = to.clone().filter(|&c| !buried(c)).map(area).sum();
+                let (sharing, shared_area) =
+                    if open_area > 0.0 { (true, open_area) } else { (false, coarse.elements.area[j as usize]) };
                 for c in to {
                     ff.column.push(c);
-                    ff.value.push(f * (refined.elements.area[c as usize] / parent_area));
+                    ff.value.push(if sharing && buried(c) { 0.0 } else { f * (area(c) / shared_area) });
                 }
             } else {
                 ff.column.push(to.start);
