@@ -517,18 +517,24 @@ fn the_surface_at_an_emitters_foot_is_refined_beside_it() {
     assert_eq!(across_concave_edges_and_emitters(&lifted, &none, 0.01, &vec![true; none.len()]), none);
 }
 
+/// A floor of 0.25 m elements and an arbitrary matrix with every entry distinct:
+/// F_ij = (1 + i + 3j) / 1000 off the diagonal.
+fn floor_with_distinct_form_factors() -> (Mesh, FormFactors) {
+    let coarse = floor_mesh(0.25);
+    let n = coarse.elements.len();
+    let rows: Vec<Vec<(u32, f32)>> = (0..n)
+        .map(|i| (0..n).filter(|&j| j != i).map(|j| (j as u32, (1 + i + 3 * j) as f32 / 1000.0)).collect())
+        .collect();
+    (coarse, FormFactors::from_rows(rows))
+}
+
 /// Substructuring: the rows kept for unsplit elements share a split element's form factor among its
 /// children by area, so every kept row sums to what it summed before the split, and a kept entry to
 /// an unsplit element is unchanged.
 #[test]
 fn kept_rows_conserve_each_rows_sum() {
-    let coarse = floor_mesh(0.25);
+    let (coarse, ff) = floor_with_distinct_form_factors();
     let n = coarse.elements.len();
-    // An arbitrary matrix with every entry distinct: F_ij = (1 + i + 3j) / 1000 off the diagonal.
-    let rows: Vec<Vec<(u32, f32)>> = (0..n)
-        .map(|i| (0..n).filter(|&j| j != i).map(|j| (j as u32, (1 + i + 3 * j) as f32 / 1000.0)).collect())
-        .collect();
-    let ff = FormFactors::from_rows(rows);
     let chosen: Vec<bool> = (0..n).map(|i| i % 3 == 0).collect();
     let refined = split(&coarse, &chosen, &mut EdgeMidpoints::default());
     let kept = kept_rows(&coarse, &ff, &chosen, &refined);
@@ -549,12 +555,8 @@ fn kept_rows_share_a_split_elements_form_factor_among_its_open_children_only() {
     // The receiver's hemicube saw only the open part of a patch that an object rests on; a buried
     // child's share would gather light the receiver never saw. One child buried: the others take the
     // whole form factor by their area, so each row's sum is still kept.
-    let coarse = floor_mesh(0.25);
+    let (coarse, ff) = floor_with_distinct_form_factors();
     let n = coarse.elements.len();
-    let rows: Vec<Vec<(u32, f32)>> = (0..n)
-        .map(|i| (0..n).filter(|&j| j != i).map(|j| (j as u32, (1 + i + 3 * j) as f32 / 1000.0)).collect())
-        .collect();
-    let ff = FormFactors::from_rows(rows);
     let chosen: Vec<bool> = (0..n).map(|i| i == 5).collect();
     let mut refined = split(&coarse, &chosen, &mut EdgeMidpoints::default());
     let children = new_indices(&chosen)[5].clone();

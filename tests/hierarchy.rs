@@ -653,6 +653,53 @@ fn hanging_nodes_take_their_edges_interpolated_value() {
     assert!(hanging > 0, "the preview solution of the Cornell box has subdivided neighbours");
 }
 
+/// A wall written as two upright strips of one material beside a stair (x ∈ [0, 0.3] and [0.3, 0.6]
+/// on the floor plane y = 0, the second strip half a step higher), each a stack of 1 m quads, so that
+/// the strips' corners lie inside each other's edges and no edge is shared: two smoothing groups. Under
+/// a linear field every leaf's fit reads the other strip's leaves at the T-junctions, so the field is
+/// exact (f32 rounding, 1e-5) at every vertex of the shared line x = 0.3 where both strips run
+/// (z ∈ [0.5, 2.5]). Each strip alone, the higher strip's corner inside the lower one's edge is
+/// extrapolated from its own bottom pair, whose slope the limit holds back: off by 0.15, the field's
+/// change across a strip.
+#[test]
+fn leaves_of_strips_that_meet_at_t_junctions_read_each_others_slope() {
+    let quad = |x0: f32, x1: f32, z0: f32, z1: f32| {
+        let v = vec![Vec3::new(x0, 0.0, z0), Vec3::new(x0, 0.0, z1), Vec3::new(x1, 0.0, z1), Vec3::new(x1, 0.0, z0)];
+        (v, 0.5, 0.0)
+    };
+    let mut surfaces: Vec<_> = (0..3).map(|k| quad(0.0, 0.3, k as f32, k as f32 + 1.0)).collect();
+    surfaces.extend((0..2).map(|k| quad(0.3, 0.6, 0.5 + k as f32, 1.5 + k as f32)));
+    let mut scene = scene_of(surfaces);
+    for surface in &mut scene.surfaces {
+        surface.material = 0;
+    }
+    let field = |p: Vec3| 1.0 + p.x as f64 + 0.3 * p.z as f64;
+    let (mut nodes, root, inputs, _) = clusters::build(&scene).unwrap();
+    for n in 0..nodes.len() {
+        if !nodes.is_cluster[n] {
+            nodes.exitance[n] = DVec3::splat(field(nodes.centre[n]));
+        }
+    }
+    let mesh = hierarchy::interpolate::leaf_mesh(&nodes, &inputs, root as usize);
+    assert!(!mesh.contacts.is_empty(), "the strips' corners lie inside each other's edges");
+    let groups: std::collections::HashSet<u32> = mesh.leaf_group.iter().copied().collect();
+    assert_eq!(groups.len(), 2, "strips meeting at T-junctions stay groups of their own");
+    let exitance: Vec<DVec3> = mesh.leaf_node.iter().map(|&n| nodes.exitance[n as usize]).collect();
+    let mut alone = mesh.clone();
+    alone.contacts.clear();
+    alone.leaf_family.clear();
+    let alone = alone.vertex_values(&exitance);
+    let error = |values: &[Vec3], v: usize| (values[v].x as f64 - field(mesh.positions[v])).abs();
+    let on_line = |v: usize| {
+        let p = mesh.positions[v];
+        (p.x - 0.3).abs() < 1e-6 && (0.5..=2.5).contains(&p.z)
+    };
+    let largest =
+        |values: &[Vec3]| (0..values.len()).filter(|&v| on_line(v)).map(|v| error(values, v)).fold(0.0, f64::max);
+    assert!(largest(&alone) > 0.1, "each strip alone: {}", largest(&alone));
+    assert!(largest(&mesh.vertex_exitance) < 1e-5, "read across the junctions: {}", largest(&mesh.vertex_exitance));
+}
+
 /// Two 4 × 2.6 × 4 m rooms side by side along z, separated by a 0.2 m wall made, as in
 /// scenes/rooms/, of two one-sided faces that each face into their own room (z = 4 faces the lit
 /// room, z = 4.2 the dark one). Every face is a `grid` × `grid` field of quads, so the cluster tree

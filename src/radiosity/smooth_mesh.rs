@@ -18,8 +18,8 @@ use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
 
 use super::boundary_vertices::{self, ElementMesh};
-use super::smoothing_groups::{smoothing_groups, Facet};
-use super::t_junctions::{vertices_inside_edges, EdgeInside};
+use super::smoothing_groups::{join, root, smoothing_groups, Facet};
+use super::t_junctions::{t_junction_families, vertices_inside_edges};
 use crate::mesh::{Mesh, NONE};
 
 /// Points closer than this fraction of the mesh's extent (per axis) are one point: the mesher puts the
@@ -163,7 +163,7 @@ const COPLANAR_COS: f32 = 0.9999;
 
 /// Per-surface values `a` and `b` at one point agree (`AGREE_RELATIVE`, `AGREE_FLOOR`, with `floor`
 /// the latter's absolute value): |a − b| ≤ r·max(a, b) + floor in every channel.
-fn agree(a: Vec3, b: Vec3, floor: f64) -> bool {
+pub fn agree(a: Vec3, b: Vec3, floor: f64) -> bool {
     (0..3).all(|k| {
         let (a, b) = (a[k] as f64, b[k] as f64);
         (a - b).abs() <= AGREE_RELATIVE * a.max(b) + floor
@@ -340,8 +340,7 @@ impl<'a> SmoothMesh<'a> {
                     let (a, b) = (members[i] as usize, members[j] as usize);
                     let curved = self.vertex_normal[a].dot(self.vertex_normal[b]) <= COPLANAR_COS;
                     if curved || agree(own[a], own[b], floor) {
-                        let (ri, rj) = (root(&mut parent, i as u32), root(&mut parent, j as u32));
-                        parent[ri.max(rj) as usize] = ri.min(rj);
+                        join(&mut parent, i as u32, j as u32);
                     }
                 }
             }
@@ -370,48 +369,6 @@ impl<'a> SmoothMesh<'a> {
         groups.dedup();
         groups.len()
     }
-}
-
-/// Per mesh surface, its fit family: the smoothing groups (`surface_group`, per mesh surface: the
-/// smallest surface index of its group) joined where a vertex of one surface lies inside an edge of
-/// another (`t_junctions`) and their facets may be one smooth surface (`Facet::smooth_with`): the
-/// strips of a wall beside a stair, the pieces of a wall round a door. Named by their smallest surface.
-/// Only the fits read families. Welding them as groups too (the pieces' shared corners averaged and
-/// their T-junctions counted in the vertex means) gave stair_hall the same gain but made l_room 3%
-/// worse, at the corners where the pieces round its wall lamp meet the ceiling (docs/accuracy.md,
-/// session 38).
-fn t_junction_families(
-    surface_group: &[u32],
-    facets: &[Facet<u32>],
-    t_junctions: &[EdgeInside],
-    vertex_surface: &[u32],
-    element_surface: &[u32],
-) -> Vec<u32> {
-    let mut parent: Vec<u32> = surface_group.to_vec();
-    for edge in t_junctions {
-        let s = element_surface[edge.element as usize];
-        for &v in &edge.inside {
-            let t = vertex_surface[v as usize];
-            if t == s || t == u32::MAX || !facets[s as usize].smooth_with(&facets[t as usize]) {
-                continue;
-            }
-            let (rs, rt) = (root(&mut parent, s), root(&mut parent, t));
-            if rs != rt {
-                parent[rs.max(rt) as usize] = rs.min(rt);
-            }
-        }
-    }
-    (0..surface_group.len() as u32).map(|s| root(&mut parent, s)).collect()
-}
-
-/// Union-find root with path halving.
-fn root(parent: &mut [u32], mut i: u32) -> u32 {
-    while parent[i as usize] != i {
-        let up = parent[parent[i as usize] as usize];
-        parent[i as usize] = up;
-        i = up;
-    }
-    i
 }
 
 /// Per mesh vertex: the normal of an element using it (every element of a surface side has its

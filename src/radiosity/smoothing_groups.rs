@@ -37,13 +37,21 @@ impl<K> Facet<K> {
 }
 
 /// Union-find root with path halving.
-fn find(parent: &mut [u32], mut i: u32) -> u32 {
+pub fn root(parent: &mut [u32], mut i: u32) -> u32 {
     while parent[i as usize] != i {
         let up = parent[parent[i as usize] as usize];
         parent[i as usize] = up;
         i = up;
     }
     i
+}
+
+/// Union-find: joins the sets of `a` and `b`, the smaller root becoming the set's name.
+pub fn join(parent: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (root(parent, a), root(parent, b));
+    if ra != rb {
+        parent[ra.max(rb) as usize] = ra.min(rb);
+    }
 }
 
 /// The smoothing group of each of `count` facets (`facet(i)`): the smallest facet index in its group.
@@ -63,16 +71,13 @@ pub fn smoothing_groups<K: Copy + Ord + Hash>(count: usize, facet: impl Fn(usize
                 }
                 Some(&j) => {
                     if j as usize != i && f.smooth_with(&facet(j as usize)) {
-                        let (ri, rj) = (find(&mut parent, i as u32), find(&mut parent, j));
-                        if ri != rj {
-                            parent[ri.max(rj) as usize] = ri.min(rj);
-                        }
+                        join(&mut parent, i as u32, j);
                     }
                 }
             }
         }
     }
-    (0..count as u32).map(|i| find(&mut parent, i)).collect()
+    (0..count as u32).map(|i| root(&mut parent, i)).collect()
 }
 
 #[cfg(test)]

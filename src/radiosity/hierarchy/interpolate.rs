@@ -5,7 +5,11 @@
 //! weighted by their open area (`Nodes::open_area`, the area-weighted mean when nothing rests on the
 //! surface), on the group's boundary the clamped linear extrapolation from the leaves inside; then a
 //! hanging node (a vertex inside a coarser neighbour's edge) takes that edge's interpolated value, so
-//! Gouraud shading shows no T-vertex cracks.
+//! Gouraud shading shows no T-vertex cracks. Input triangles of one plane that meet at T-junctions
+//! instead of shared edges (a wall written as upright strips beside a stair: `t_junctions`) stay
+//! groups of their own, but each leaf's linear fit reads the leaves across the junction, as the
+//! uniform and adaptive meshes' fits do (`smooth_mesh`): without it each strip's values ramp to its
+//! own extrapolation and the wall shows vertical bands.
 
 use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
@@ -14,7 +18,9 @@ use super::clusters::InputTriangles;
 use super::nodes::Nodes;
 use crate::mesh::NONE;
 use crate::radiosity::boundary_vertices::{self, ElementMesh};
+use crate::radiosity::smooth_mesh::agree;
 use crate::radiosity::smoothing_groups::{self, Facet};
+use crate::radiosity::t_junctions::{t_junction_families, vertices_inside_edges};
 
 /// Upper bound on the hanging-node sweeps of `leaf_mesh`: one per level of nested T-junctions (a leaf
 /// is at most a few dozen subdivisions below its input triangle).
@@ -42,6 +48,11 @@ pub struct LeafMesh {
     pub hanging: Vec<[u32; 3]>,
     /// Per vertex: conforming exitance (W/m²).
     pub vertex_exitance: Vec<Vec3>,
+    /// T-junctions between groups (`t_junctions`): (vertex, leaf) where the vertex, of another group
+    /// of the leaf's fit family, lies inside one of the leaf's edges.
+    pub contacts: Vec<(u32, u32)>,
+    /// Per leaf: its fit family (`t_junctions::t_junction_families` over the input triangles).
+    pub leaf_family: Vec<u32>,
 }
 
 impl ElementMesh for LeafMesh {
@@ -73,6 +84,20 @@ impl ElementMesh for LeafMesh {
 
     fn surface(&self, e: usize) -> u32 {
         self.leaf_group[e]
+    }
+
+    fn contacts(&self) -> &[(u32, u32)] {
+        &self.contacts
+    }
+
+    fn fit_surface(&self, e: usize) -> u32 {
+        self.leaf_family.get(e).copied().unwrap_or(self.leaf_group[e])
+    }
+
+    /// Across a T-junction only where the two leaves' values agree (`smooth_mesh::agree`, without its
+    /// floor): a sharp shadow edge lying on the junction keeps its step.
+    fn fit_reads(&self, e: usize, n: usize, values: &[Vec3]) -> bool {
+        self.leaf_group[e] == self.leaf_group[n] || agree(values[e], values[n], 0.0)
     }
 
     fn buried(&self, e: usize) -> bool {
@@ -153,20 +178,23 @@ fn key(p: Vec3) -> PositionKey {
     [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]
 }
 
+/// Input triangle i as a facet for `smoothing_groups` (its corners compared bit for bit).
+fn input_facet(nodes: &Nodes, inputs: &InputTriangles, i: usize) -> Facet<PositionKey> {
+    let n = inputs.node[i] as usize;
+    let c = nodes.corners[n];
+    Facet {
+        corners: [key(c[0]), key(c[1]), key(c[2]), [0; 3]],
+        corner_count: 3,
+        normal: nodes.normal[n],
+        material: inputs.material[i],
+        back: inputs.back[i],
+    }
+}
+
 /// Smoothing group of each input triangle (`smoothing_groups::smoothing_groups` over the input
 /// triangles, their corners compared bit for bit).
 pub fn smoothing_groups(nodes: &Nodes, inputs: &InputTriangles) -> Vec<u32> {
-    smoothing_groups::smoothing_groups(inputs.node.len(), |i| {
-        let n = inputs.node[i] as usize;
-        let c = nodes.corners[n];
-        Facet {
-            corners: [key(c[0]), key(c[1]), key(c[2]), [0; 3]],
-            corner_count: 3,
-            normal: nodes.normal[n],
-            material: inputs.material[i],
-            back: inputs.back[i],
-        }
-    })
+    smoothing_groups::smoothing_groups(inputs.node.len(), |i| input_facet(nodes, inputs, i))
 }
 
 /// Leaf elements below `root` (depth-first order) with shared vertices and conforming vertex
@@ -175,6 +203,9 @@ pub fn leaf_mesh(nodes: &Nodes, inputs: &InputTriangles, root: usize) -> LeafMes
     let groups = smoothing_groups(nodes, inputs);
     let mut mesh = LeafMesh::default();
     let mut vertex_of: FxHashMap<(u32, PositionKey), u32> = FxHashMap::default();
+    // Per vertex: the input triangle of the first leaf that made it (its group's facet, for the
+    // T-junction families).
+    let mut vertex_input: Vec<u32> = Vec::new();
     let mut stack = vec![root];
     while let Some(n) = stack.pop() {
         if !nodes.is_leaf(n) {
@@ -185,6 +216,7 @@ pub fn leaf_mesh(nodes: &Nodes, inputs: &InputTriangles, root: usize) -> LeafMes
         let tri = nodes.corners[n].map(|p| {
             *vertex_of.entry((group, key(p))).or_insert_with(|| {
                 mesh.positions.push(p);
+                vertex_input.push(nodes.input[n]);
                 mesh.positions.len() as u32 - 1
             })
         });
@@ -225,7 +257,36 @@ pub fn leaf_mesh(nodes: &Nodes, inputs: &InputTriangles, root: usize) -> LeafMes
     }
     mesh.boundary =
         boundary_vertices::boundary_vertices(&mesh, &|a, b| midpoint_of.get(&(a.min(b), a.max(b))).copied());
+    t_junction_contacts(&mut mesh, nodes, inputs, &groups, &vertex_input);
     let exitance: Vec<DVec3> = mesh.leaf_node.iter().map(|&n| nodes.exitance[n as usize]).collect();
     mesh.vertex_exitance = mesh.vertex_values(&exitance);
     mesh
+}
+
+/// Finds the T-junctions between groups (vertices of one group strictly inside a leaf edge of
+/// another, `t_junctions::vertices_inside_edges`), joins the groups into fit families where their
+/// input triangles may be one smooth surface (`t_junction_families`), and records the contacts within
+/// a family (`LeafMesh::contacts`, `leaf_family`).
+fn t_junction_contacts(
+    mesh: &mut LeafMesh,
+    nodes: &Nodes,
+    inputs: &InputTriangles,
+    groups: &[u32],
+    vertex_input: &[u32],
+) {
+    let vertex_group: Vec<u32> = vertex_input.iter().map(|&i| groups[i as usize]).collect();
+    let corners: Vec<[u32; 4]> = mesh.triangles.iter().map(|&[a, b, c]| [a, b, c, NONE]).collect();
+    let junctions =
+        vertices_inside_edges(&mesh.positions, &corners, |v, l| vertex_group[v as usize] != mesh.leaf_group[l]);
+    let leaf_input: Vec<u32> = mesh.leaf_node.iter().map(|&n| nodes.input[n as usize]).collect();
+    let facets: Vec<Facet<PositionKey>> = (0..inputs.node.len()).map(|i| input_facet(nodes, inputs, i)).collect();
+    let family = t_junction_families(groups, &facets, &junctions, vertex_input, &leaf_input);
+    mesh.leaf_family = leaf_input.iter().map(|&i| family[i as usize]).collect();
+    mesh.contacts = junctions
+        .iter()
+        .flat_map(|edge| edge.inside.iter().map(move |&v| (v, edge.element)))
+        .filter(|&(v, l)| family[vertex_input[v as usize] as usize] == mesh.leaf_family[l as usize])
+        .collect();
+    mesh.contacts.sort_unstable();
+    mesh.contacts.dedup();
 }
