@@ -223,7 +223,14 @@ impl<'a> SmoothMesh<'a> {
                 vertex_surface[v as usize] = e.surface[i];
             }
         }
-        let t_junctions = vertices_inside_edges(&mesh.positions, &e.corners, |_, _| true);
+        let class = |s: u32| facets[s as usize].material.wrapping_mul(2) | facets[s as usize].back as u32;
+        let t_junctions = vertices_inside_edges(
+            &mesh.positions,
+            &e.corners,
+            |v| class(vertex_surface[v as usize]),
+            |element| class(e.surface[element]),
+            |_, _| true,
+        );
         let surface_family = t_junction_families(&surface_group, &facets, &t_junctions, &vertex_surface, &e.surface);
         let family: Vec<u32> = e.surface.iter().map(|&s| surface_family[s as usize]).collect();
         let vertex_family: Vec<u32> =

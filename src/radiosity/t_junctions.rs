@@ -27,8 +27,10 @@ pub struct EdgeInside {
     pub inside: Vec<u32>,
 }
 
-/// Every element edge with vertices strictly inside it, and those vertices (only those for which
-/// `wanted(v, element)` holds).
+/// Every element edge with vertices strictly inside it, and those vertices: only vertices of the
+/// edge's element's class (`vertex_class(v) == element_class(e)`; both uses want vertices of surfaces
+/// of the element's material and side, so the grid is kept per class and a long floor edge never
+/// visits the dense vertices of a statue standing on it) for which `wanted(v, element)` holds.
 ///
 /// A vertex p is inside the edge (a, b) when, with s = (p − a)·(b − a)/|b − a|², the distance
 /// |p − (a + s(b − a))| is at most the tolerance t and t < s·|b − a| < |b − a| − t (t =
@@ -37,6 +39,8 @@ pub struct EdgeInside {
 pub fn vertices_inside_edges(
     positions: &[Vec3],
     corners: &[[u32; 4]],
+    vertex_class: impl Fn(u32) -> u32,
+    element_class: impl Fn(usize) -> u32,
     wanted: impl Fn(u32, usize) -> bool,
 ) -> Vec<EdgeInside> {
     let mut inside = Vec::new();
@@ -65,9 +69,9 @@ pub fn vertices_inside_edges(
             used[v as usize] = true;
         }
     }
-    let mut grid: FxHashMap<[i32; 3], Vec<u32>> = FxHashMap::default();
+    let mut grid: FxHashMap<(u32, [i32; 3]), Vec<u32>> = FxHashMap::default();
     for (v, &p) in positions.iter().enumerate().filter(|&(v, _)| used[v]) {
-        grid.entry(key(p)).or_default().push(v as u32);
+        grid.entry((vertex_class(v as u32), key(p))).or_default().push(v as u32);
     }
     let mut found: Vec<(f32, u32)> = Vec::new();
     let mut cells: Vec<[i32; 3]> = Vec::new();
@@ -98,7 +102,8 @@ pub fn vertices_inside_edges(
         cells.sort_unstable();
         cells.dedup();
         found.clear();
-        for vertices in cells.iter().filter_map(|c| grid.get(c)) {
+        let class = element_class(e);
+        for vertices in cells.iter().filter_map(|&c| grid.get(&(class, c))) {
             for &v in vertices.iter().filter(|&&v| v != a && v != b) {
                 let p = positions[v as usize];
                 let along = (p - pa).dot(d) / length;
@@ -169,7 +174,7 @@ mod tests {
             Vec3::new(1.0, 2.0, 0.0),
         ];
         let corners = vec![[0, 1, 2, 3], [4, 5, 6, 7], [0, 8, 9, 3]];
-        let inside = vertices_inside_edges(&positions, &corners, |_, e| e < 2);
+        let inside = vertices_inside_edges(&positions, &corners, |_| 0, |_| 0, |_, e| e < 2);
         // The left strip's right edge (1, 2) holds 8 and 9 (4 and 7 sit on its ends: not inside); the
         // right strip's left edge (7, 4) holds them too, ordered from 7 down.
         let edge = |element: u32, ends: (u32, u32), inside: Vec<u32>| EdgeInside { element, ends, inside };

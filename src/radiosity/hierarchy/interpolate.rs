@@ -276,9 +276,15 @@ fn t_junction_contacts(
 ) {
     let vertex_group: Vec<u32> = vertex_input.iter().map(|&i| groups[i as usize]).collect();
     let corners: Vec<[u32; 4]> = mesh.triangles.iter().map(|&[a, b, c]| [a, b, c, NONE]).collect();
-    let junctions =
-        vertices_inside_edges(&mesh.positions, &corners, |v, l| vertex_group[v as usize] != mesh.leaf_group[l]);
     let leaf_input: Vec<u32> = mesh.leaf_node.iter().map(|&n| nodes.input[n as usize]).collect();
+    let class = |i: u32| inputs.material[i as usize].wrapping_mul(2) | inputs.back[i as usize] as u32;
+    let junctions = vertices_inside_edges(
+        &mesh.positions,
+        &corners,
+        |v| class(vertex_input[v as usize]),
+        |l| class(leaf_input[l]),
+        |v, l| vertex_group[v as usize] != mesh.leaf_group[l],
+    );
     let facets: Vec<Facet<PositionKey>> = (0..inputs.node.len()).map(|i| input_facet(nodes, inputs, i)).collect();
     let family = t_junction_families(groups, &facets, &junctions, vertex_input, &leaf_input);
     mesh.leaf_family = leaf_input.iter().map(|&i| family[i as usize]).collect();
