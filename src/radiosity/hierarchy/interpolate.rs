@@ -8,8 +8,8 @@
 //! Gouraud shading shows no T-vertex cracks. Input triangles of one plane that meet at T-junctions
 //! instead of shared edges (a wall written as upright strips beside a stair: `t_junctions`) stay
 //! groups of their own, but each leaf's linear fit reads the leaves across the junction, as the
-//! uniform and adaptive meshes' fits do (`smooth_mesh`): without it each strip's values ramp to its
-//! own extrapolation and the wall shows vertical bands.
+//! uniform and adaptive meshes' fits do (`smooth_mesh`): without it a strip's corner inside its
+//! neighbour's edge is extrapolated from the strip's own leaves alone (docs/accuracy.md, session 39).
 
 use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
