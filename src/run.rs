@@ -57,8 +57,20 @@ impl Failure {
 }
 
 impl std::fmt::Display for Failure {
+    /// The error and its chain of causes, `error: cause: …`, leaving out a cause whose text the
+    /// message before it already carries (most of radray's errors quote their `source`, and anyhow's
+    /// `{:#}` printed it twice: "cannot read scene file: No such file …: No such file …").
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{:#}", self.error)
+        let mut previous = self.error.to_string();
+        write!(f, "{previous}")?;
+        for cause in self.error.chain().skip(1) {
+            let text = cause.to_string();
+            if !previous.contains(&text) {
+                write!(f, ": {text}")?;
+            }
+            previous = text;
+        }
+        Ok(())
     }
 }
 

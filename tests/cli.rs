@@ -72,6 +72,18 @@ fn bad_scene_exits_2_with_file_and_line_and_writes_nothing() {
 }
 
 #[test]
+fn a_missing_scene_file_is_named_once_with_its_reason_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.toml");
+    let out = radray(&["render", missing.to_str().unwrap(), "-o", dir.path().join("x.png").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let msg = stderr(&out);
+    assert!(msg.contains("missing.toml: cannot read scene file"), "{msg}");
+    let reason = std::fs::read(&missing).unwrap_err().to_string();
+    assert_eq!(msg.matches(&reason).count(), 1, "the reason once: {msg}");
+}
+
+#[test]
 fn unusable_outputs_are_refused_before_any_work() {
     let dir = tempfile::tempdir().unwrap();
     let out = radray(&["render", &scene("cornell_box.toml"), "-o", dir.path().join("x.jpg").to_str().unwrap()]);
