@@ -7,7 +7,10 @@ use super::form_factor::{
     triangle_to_polygon,
 };
 use super::nodes::Nodes;
-use super::visibility::{link_visibility, sampled_form_factor, visibility_spread, Visibility, VisibilityContext};
+use super::visibility::{
+    link_visibility, link_visibility_with, sampled_form_factor, visibility_spread, Visibility, VisibilityContext,
+    BLOCKED_CONFIRM_FACTOR,
+};
 
 /// A link while refining: receiver, source, form factor and its error spread.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -241,13 +244,16 @@ pub fn admissible(nodes: &Nodes, receiver: usize, source: usize) -> bool {
 }
 
 /// Estimates the form factor of link (receiver ← source) and its error spread, the spread capped at
-/// `spread_cap` (the parent link's share); `None` when nothing can pass (the ends face away from each
-/// other, or no ray gets through and the estimate is reliable).
+/// `spread_cap` (the parent link's share); `None` when nothing can pass: the ends face away from each
+/// other, or no ray gets through and the light the rays may have missed is below the threshold
+/// (`worth_confirming`). Above it the link is measured again with `BLOCKED_CONFIRM_FACTOR` × N rays,
+/// and if they are all blocked too it is kept with F = 0 and the spread of the share they may have
+/// missed (`blocked_element_link`, and max(V, 1/(N+1)) below), to be split while that matters.
 ///
 /// - Element ← element: F = V · (1/3) Σ_k F_Lambert(x_k → S) over the receiver's quadrature points;
 ///   ΔF = V·ΔF_quadrature + 2·F̄·min(V, 1 − V) (receiver quadrature error, see
 ///   `form_factor::element_to_element`, plus partial visibility, so a significant link in a penumbra
-///   is refined).
+///   is refined); with V = 0, `blocked_element_link`.
 /// - Far links with a cluster end: F = V · `member_pair_form_factor` when the ends hold at most
 ///   `EXACT_NEAR_PAIRS` member pairs, else V · P_S P_R / (π d² A_R) (Sillion 1995) with each end's
 ///   exact projected area P = Σ A_i max(0, n_i·ω) (`Nodes::projected_area`); ΔF = the bound
@@ -281,10 +287,19 @@ pub fn estimate(
         if early_mean.is_some_and(|mean| !(mean > 0.0)) {
             return None;
         }
-        let v = link_visibility(ctx, nodes, receiver, source).visible as f64;
-        if v == 0.0 {
-            return None;
+        let mut visibility = link_visibility(ctx, nodes, receiver, source);
+        if visibility.visible == 0.0 {
+            let mean = early_mean.unwrap_or_else(near_mean);
+            let (_, spread) = blocked_element_link(error, mean, visibility.rays, spread_cap)?;
+            if !worth_confirming(nodes, receiver, source, spread, threshold_w) {
+                return None;
+            }
+            visibility = link_visibility_with(ctx, nodes, receiver, source, ctx.rays * BLOCKED_CONFIRM_FACTOR);
+            if visibility.visible == 0.0 {
+                return blocked_element_link(error, mean, visibility.rays, spread_cap);
+            }
         }
+        let v = visibility.visible as f64;
         // The spread below is known without the mean when V = 1 (ΔF = error exactly) or when its
         // lower bound error·V already reaches the cap (the mean only adds to it, f32 rounding is
         // monotone). When it alone sends the link to be split, the 48-point rule is not computed:
@@ -328,13 +343,55 @@ pub fn estimate(
     if !(bound > 0.0) {
         return None;
     }
-    let visibility = link_visibility(ctx, nodes, receiver, source);
+    // Every ray blocked: V may still be up to about 1/(rays + 1), which the spread keeps (see
+    // `blocked_element_link`).
+    let spread_of = |visibility: Visibility| {
+        let least = 1.0 / (visibility.rays.max(1) as f64 + 1.0);
+        ((bound * (visibility.visible as f64).max(least)) as f32).min(spread_cap)
+    };
+    let mut visibility = link_visibility(ctx, nodes, receiver, source);
+    if visibility.visible == 0.0 {
+        if worth_confirming(nodes, receiver, source, spread_of(visibility), threshold_w) {
+            visibility = link_visibility_with(ctx, nodes, receiver, source, ctx.rays * BLOCKED_CONFIRM_FACTOR);
+        } else if bound < 1.0 {
+            return None;
+        }
+    }
     let v = visibility.visible as f64;
-    if v == 0.0 && bound < 1.0 {
+    let spread = spread_of(visibility);
+    Some(((f * v) as f32, spread + push_spread(nodes, receiver, f, visibility) as f32))
+}
+
+/// An element link none of whose `rays` visibility rays passed: F = 0, but a pair whose true share is
+/// V passes none of them with probability (1 − V)^rays. Its spread is therefore that of V ≤
+/// 1/(rays + 1), the share a clear shaft shows one ray in rays + 1 of:
+///
+/// ΔF = (ΔF₆ + 2·F_unoccluded) / (rays + 1),
+///
+/// ΔF₆ the six-point spread (`element_six_points`). `None` when there is no unoccluded transfer.
+fn blocked_element_link(six_point_spread: f64, unoccluded: f64, rays: u32, spread_cap: f32) -> Option<(f32, f32)> {
+    if !(unoccluded > 0.0) {
         return None;
     }
-    let spread = ((bound * v.max(1.0 / (ctx.rays as f64 + 1.0))) as f32).min(spread_cap);
-    Some(((f * v) as f32, spread + push_spread(nodes, receiver, f, visibility) as f32))
+    let possible = 1.0 / (rays.max(1) as f64 + 1.0);
+    let spread = (six_point_spread + 2.0 * unoccluded) * possible;
+    Some((0.0, (spread as f32).min(spread_cap)))
+}
+
+/// Whether a link none of whose N rays passed is measured again with `BLOCKED_CONFIRM_FACTOR` × N
+/// rays rather than dropped: when the light its rays may have missed, its spread `spread` for V ≤
+/// 1/(N + 1), is an error refinement would act on (`link_error_power` above `threshold_w`). A link
+/// still blocked after those is kept with F = 0 and the smaller spread of V ≤ 1/(4N + 1).
+///
+/// Until session 40 such a link was dropped after N rays: a pair whose true share V is a fifth
+/// passes none of 8 rays one time in six, and its light was lost unsplit. vault_hall's walls took
+/// 2.5% too little direct light over the links at 8 rays (11.4% at 4, 0.1% at 16); its radiosity-mode
+/// relMSE (seed 0) went 2.49e-3 → 1.92e-3 and gap_room's 1.13e-2 → 8.33e-3, for +14% CPU-s and +8% links on Sponza.
+/// Measuring every such link again gave 1.81e-3 and 8.65e-3 for +40% CPU-s on Sponza; keeping every
+/// one unconfirmed with F = 0 (session 39's branch) cost 28% more links there and changed nothing in
+/// the rooms (docs/accuracy.md, session 40).
+fn worth_confirming(nodes: &Nodes, receiver: usize, source: usize, spread: f32, threshold_w: f64) -> bool {
+    link_error_power(nodes, receiver, source, spread) > threshold_w
 }
 
 /// The unoccluded form factor of a far link whose ends hold at most `EXACT_NEAR_PAIRS` member pairs
@@ -482,8 +539,9 @@ pub fn near_estimate(nodes: &Nodes, ctx: &VisibilityContext, receiver: usize, so
     }
     let mean = sum / area;
     let deviation: f64 = per_leaf.iter().map(|&(a, f, error)| a * ((f - mean).abs() + error)).sum::<f64>() / area;
-    let v = link_visibility(ctx, nodes, receiver, source).visible as f64;
-    let deviation = v * deviation + mean * visibility_spread(v, ctx.rays);
+    let visibility = link_visibility(ctx, nodes, receiver, source);
+    let v = visibility.visible as f64;
+    let deviation = v * deviation + mean * visibility_spread(v, visibility.rays);
     Some(NearEstimate { form_factor: (v * mean).min(1.0) as f32, deviation: deviation as f32 })
 }
 

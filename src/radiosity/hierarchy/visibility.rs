@@ -37,6 +37,9 @@ pub struct Visibility {
     /// its form-factor kernel (what the form factor is multiplied by; for a cluster receiver also the share of its facing members the source
     /// reaches, see `links::push_spread`).
     pub visible: f32,
+    /// The sample pairs V was measured over (N, or fewer when fewer faced each other). A V = 0 read
+    /// from them still allows a true share of up to about 1/(rays + 1) (`visibility_spread`).
+    pub rays: u32,
 }
 
 /// The visibility of link (receiver ← source), measured with rays:
@@ -58,14 +61,27 @@ pub struct Visibility {
 /// and a cluster's member picks independent): cornell_original's hierarchical relMSE was 0.00112 on
 /// seed 0 against the 0.00106 target, its error dominated by visibility noise (docs/accuracy.md).
 pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, source: usize) -> Visibility {
-    let n = ctx.rays.max(1);
+    link_visibility_with(ctx, nodes, receiver, source, ctx.rays)
+}
+
+/// `link_visibility` over N = `rays` sample pairs instead of `ctx.rays`. The pairs are the first N
+/// of the link's sequence, so a larger N measures the smaller N's pairs again and more besides
+/// (how a link whose rays all came out blocked is confirmed, `links::estimate`).
+pub fn link_visibility_with(
+    ctx: &VisibilityContext,
+    nodes: &Nodes,
+    receiver: usize,
+    source: usize,
+    rays: u32,
+) -> Visibility {
+    let n = rays.max(1);
     // Two elements wholly in front of each other: every sample pair faces, so all rays would be
     // traced and, when the shaft is clear, all would pass: V = n/n = 1 without sampling.
     let mut clear = None;
     if elements_face_each_other(nodes, receiver, source)
         && *clear.get_or_insert_with(|| link_shaft_clear(ctx, nodes, receiver, source))
     {
-        return Visibility { visible: 1.0 };
+        return Visibility { visible: 1.0, rays: n };
     }
     let (at_receiver, at_source) = EndPattern::pair(link_seed(ctx.seed, nodes, receiver, source));
     let softening_sq = pair_kernel_softening_sq(nodes, receiver, source, n);
@@ -98,10 +114,16 @@ pub fn link_visibility(ctx: &VisibilityContext, nodes: &Nodes, receiver: usize, 
                     0.0
                 }
             });
-        return Visibility { visible };
+        return Visibility { visible, rays: n };
     }
-    Visibility { visible: (visible / weight).min(1.0) as f32 }
+    Visibility { visible: (visible / weight).min(1.0) as f32, rays: facing }
 }
+
+/// How many times `VisibilityContext::rays` sample pairs a link is measured with again when its
+/// first N rays all came out blocked and the light they may have missed matters
+/// (`links::estimate`): a pair whose true share is V passes none of N rays with probability
+/// (1 − V)ᴺ, so V = 0 read from 8 rays still allows V ≈ 1/9 (docs/accuracy.md, session 40).
+pub const BLOCKED_CONFIRM_FACTOR: u32 = 4;
 
 /// Member pairs `facing_member_visibility` searches at most.
 pub const FACING_SEARCH_PAIRS: usize = 4096;
