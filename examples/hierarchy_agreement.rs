@@ -76,12 +76,19 @@ fn main() -> ExitCode {
         floor_area: min_element_area,
         min_element_area,
         budget_bytes: params.memory_bytes,
+        reference_exitance: power / area,
+        dark_receiver_floor: 1.0,
     };
     hsolve::reset_to_emission(&mut nodes, root);
     let mut links = Links::default();
     for pass in 1..=params.refinement_passes {
         let (records, self_links) =
             if pass == 1 { (Vec::new(), vec![root as u32]) } else { (links.to_records(), vec![]) };
+        let settings = if pass == 1 {
+            settings
+        } else {
+            RefineSettings { dark_receiver_floor: params.dark_receiver_floor, ..settings }
+        };
         links = refine(&mut nodes, &ctx, records, self_links, &settings, &mut |_, _, _| {}).links;
         let (sweeps, converged) = hsolve::solve(
             &mut nodes,

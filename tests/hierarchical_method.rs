@@ -56,7 +56,8 @@ fn scene_keys_choose_and_tune_the_hierarchy() {
     let dir = tempfile::tempdir().unwrap();
     let path = cornell_with(
         dir.path(),
-        "method = \"hierarchical\"\nmemory = \"2GB\"\nerror_threshold = 0.2\nmin_element_size = 5.0\nvisibility_rays = 6",
+        "method = \"hierarchical\"\nmemory = \"2GB\"\nerror_threshold = 0.2\nmin_element_size = 5.0\nvisibility_rays = 6\n\
+         dark_receiver_floor = 0.5",
     );
     let s = scene::load(&path).unwrap();
     assert_eq!(s.radiosity.method, MethodChoice::Hierarchical);
@@ -64,6 +65,9 @@ fn scene_keys_choose_and_tune_the_hierarchy() {
     let p = hierarchy_params(&s);
     assert_eq!(p.error_threshold, 0.2);
     assert_eq!(p.visibility_rays, 6);
+    assert_eq!(p.dark_receiver_floor, 0.5);
+    // Unset, every receiver is judged alike (δ = 1).
+    assert_eq!(hierarchy_params(&load("cornell_box.toml")).dark_receiver_floor, 1.0);
     // Nodes and links get three quarters of the budget.
     assert_eq!(p.memory_bytes, 1_500_000_000);
     // min_element_size is a length: the divisor of the diagonal that gives it.
@@ -112,6 +116,8 @@ fn bad_hierarchy_keys_are_refused_with_file_and_line() {
         ("memory = -5", "memory"),
         ("error_threshold = 0.0", "error_threshold"),
         ("min_element_size = -1.0", "min_element_size"),
+        ("dark_receiver_floor = 0.0", "dark_receiver_floor"),
+        ("dark_receiver_floor = 1.5", "dark_receiver_floor"),
         ("method = \"fastest\"", "method"),
     ] {
         let path = cornell_with(dir.path(), extra);

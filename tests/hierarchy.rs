@@ -454,24 +454,33 @@ fn a_cluster_receiver_pushes_a_far_link_to_the_members_facing_it() {
     assert_eq!(total[wall], DVec3::ZERO);
 }
 
+/// The Cornell box's nodes with every leaf at its emission (before the first refinement), its root,
+/// and the tracing triangles' acceleration structure.
+fn cornell_at_emission() -> (SceneDescription, Nodes, usize, radray::accel::Accel) {
+    let scene = load_scene("cornell_box.toml");
+    let (mut nodes, root, _inputs, tracing) = clusters::build(&scene).unwrap();
+    let root = root as usize;
+    let accel = radray::accel::Accel::build(&tracing.positions, &tracing.triangles);
+    hsolve::reset_to_emission(&mut nodes, root);
+    (scene, nodes, root, accel)
+}
+
 /// Refinement at a fixed exitance never raises the summed error estimate Σ ρ_R A_R B_S ΔF: a child
 /// link's spread is capped by its parent's share. Checked over a run of passes with thresholds
 /// falling by 2× each on the Cornell box, with the exitance of a first solve. Tolerance: the sums are
 /// f64 over ≤ 10⁶ terms, 1e-9 relative.
 #[test]
 fn refinement_never_makes_the_error_estimate_grow() {
-    let scene = load_scene("cornell_box.toml");
-    let (mut nodes, root, _inputs, tracing) = clusters::build(&scene).unwrap();
-    let root = root as usize;
-    let accel = radray::accel::Accel::build(&tracing.positions, &tracing.triangles);
+    let (scene, mut nodes, root, accel) = cornell_at_emission();
     let ctx =
         hierarchy::visibility::VisibilityContext { accel: &accel, rays: 4, offset: scene.diagonal() * 1e-5, seed: 1 };
-    hsolve::reset_to_emission(&mut nodes, root);
     let mut settings = refine::RefineSettings {
         threshold: 0.3 * 0.22,
         floor_area: (scene.diagonal() / 100.0).powi(2),
         min_element_area: (scene.diagonal() / 100.0).powi(2),
         budget_bytes: 1 << 30,
+        reference_exitance: 0.22,
+        dark_receiver_floor: 1.0,
     };
     let first = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {});
     hsolve::solve(&mut nodes, &first.links, root, 1.0, 1e-3, 100, &mut |_, _| {});
@@ -488,6 +497,75 @@ fn refinement_never_makes_the_error_estimate_grow() {
         assert!(out.error_after_w <= out.error_before_w * (1.0 + 1e-9), "pass {pass}: {out:?}");
         links = out.links;
     }
+}
+
+/// A receiver's share of the allowed error, clamp(B_R/Ē, δ, 1): whole at or above the scene's mean
+/// emitted exitance Ē, in proportion to its exitance below it, never under δ; δ = 1 (the first
+/// pass) and a scene that emits nothing (Ē = 0) judge every receiver alike.
+#[test]
+fn a_receiver_darker_than_the_mean_emission_keeps_a_share_of_the_error_in_proportion() {
+    let share = refine::dark_receiver_share;
+    assert_eq!(share(2.0, 1.0, 0.25), 1.0);
+    assert_eq!(share(1.0, 1.0, 0.25), 1.0);
+    assert_eq!(share(0.5, 1.0, 0.25), 0.5);
+    assert_eq!(share(0.1, 1.0, 0.25), 0.25);
+    assert_eq!(share(0.0, 1.0, 0.25), 0.25);
+    assert_eq!(share(0.1, 1.0, 1.0), 1.0);
+    assert_eq!(share(0.1, 0.0, 0.25), 1.0);
+    let settings = refine::RefineSettings {
+        threshold: 0.01,
+        floor_area: 0.5,
+        min_element_area: 0.5,
+        budget_bytes: 1 << 30,
+        reference_exitance: 2.0,
+        dark_receiver_floor: 0.25,
+    };
+    // ε·Ē·max(A, A_min)·s: a bright 4 m² receiver, a half-bright one, one below the floor area.
+    assert!((settings.allowed_error_w(4.0, 3.0) - 0.04).abs() < 1e-12);
+    assert!((settings.allowed_error_w(4.0, 1.0) - 0.02).abs() < 1e-12);
+    assert!((settings.allowed_error_w(0.1, 0.0) - 0.01 * 0.5 * 0.25).abs() < 1e-12);
+}
+
+/// Holding dark receivers to a relative error refines them, not the bright ones: on the Cornell box,
+/// after a first solve, a pass with δ = 1/4 makes more than twice the links of δ = 1 into receivers
+/// darker than Ē, and within 2% of the same number into the brighter ones (not exactly the same: a
+/// dark receiver's link may split a bright source element, which a bright receiver's links then
+/// find split).
+#[test]
+fn holding_dark_receivers_to_a_relative_error_refines_them_not_the_bright_ones() {
+    let (scene, mut nodes, root, accel) = cornell_at_emission();
+    let ctx =
+        hierarchy::visibility::VisibilityContext { accel: &accel, rays: 4, offset: scene.diagonal() * 1e-5, seed: 1 };
+    let reference_exitance = 0.22;
+    let settings = refine::RefineSettings {
+        threshold: 0.05 * reference_exitance,
+        floor_area: (scene.diagonal() / 100.0).powi(2),
+        min_element_area: (scene.diagonal() / 100.0).powi(2),
+        budget_bytes: 1 << 30,
+        reference_exitance,
+        dark_receiver_floor: 1.0,
+    };
+    let first = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {});
+    hsolve::solve(&mut nodes, &first.links, root, 1.0, 1e-3, 100, &mut |_, _| {});
+    let count = |floor: f64| {
+        let mut nodes = nodes.clone();
+        let settings = refine::RefineSettings { dark_receiver_floor: floor, ..settings };
+        let out = refine::refine(&mut nodes, &ctx, first.links.to_records(), Vec::new(), &settings, &mut |_, _, _| {});
+        let (mut bright, mut dark) = (0usize, 0usize);
+        for l in out.links.to_records() {
+            if nodes.exitance_mean[l.receiver as usize] >= reference_exitance {
+                bright += 1;
+            } else {
+                dark += 1;
+            }
+        }
+        (bright, dark)
+    };
+    let (alike, relative) = (count(1.0), count(0.25));
+    println!("links into bright, dark receivers: δ = 1 {alike:?}, δ = 1/4 {relative:?}");
+    assert!(alike.0 > 0 && alike.1 > 0, "{alike:?}");
+    assert!(relative.0.abs_diff(alike.0) * 50 <= alike.0, "{relative:?} against {alike:?}");
+    assert!(relative.1 > alike.1 * 2, "{relative:?} against {alike:?}");
 }
 
 /// Mean exitance per input surface on the Cornell box, hierarchy against the full-matrix hemicube

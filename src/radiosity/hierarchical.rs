@@ -72,6 +72,7 @@ pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
             hierarchy::scene_visibility_rays(defaults.visibility_rays, hierarchy::count_input_triangles(scene))
         }),
         refinement_passes: h.refinement_passes.unwrap_or(defaults.refinement_passes),
+        dark_receiver_floor: h.dark_receiver_floor.unwrap_or(defaults.dark_receiver_floor),
         tolerance: scene.radiosity.tolerance,
         memory_bytes: usize::try_from(h.memory_bytes / 4 * 3).unwrap_or(usize::MAX),
         seed: scene.radiosity.seed,
@@ -117,6 +118,7 @@ pub fn geometry_key(scene: &SceneDescription, params: &HierarchyParams) -> u64 {
     h.write_u64(params.max_sweeps as u64);
     h.write_u64(params.memory_bytes as u64);
     h.write_u64(params.seed);
+    h.write_u64(params.dark_receiver_floor.to_bits());
     h.finish()
 }
 

@@ -284,6 +284,10 @@ pub struct HierarchySettings {
     pub visibility_rays: Option<u32>,
     /// Refine-and-solve passes, or the preset's.
     pub refinement_passes: Option<u32>,
+    /// δ (`dark_receiver_floor`): from the second pass on, a receiver darker than the mean emitted
+    /// exitance is held to an error relative to its own exitance, down to δ·ε; `None`: the preset's
+    /// (1, off).
+    pub dark_receiver_floor: Option<f64>,
 }
 
 /// 8 GB, the budget for pass one.
@@ -298,6 +302,7 @@ impl Default for HierarchySettings {
             min_element_size: None,
             visibility_rays: None,
             refinement_passes: None,
+            dark_receiver_floor: None,
         }
     }
 }

@@ -96,6 +96,7 @@ struct RawRadiosity {
     min_element_size: Option<S<f32>>,
     visibility_rays: Option<S<i64>>,
     refinement_passes: Option<S<i64>>,
+    dark_receiver_floor: Option<S<f64>>,
     adaptive_levels: Option<S<i64>>,
     adaptive_threshold: Option<S<f64>>,
     auto_adaptive: Option<bool>,
@@ -588,6 +589,9 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
     }
     if r.refinement_passes.is_some() {
         h.refinement_passes = Some(loc.positive_int(&r.refinement_passes, "refinement_passes", 1, 32, 0)?);
+    }
+    if let Some(d) = loc.ranged(&r.dark_receiver_floor, "dark_receiver_floor", |x| x > 0.0 && x <= 1.0, "in (0, 1]")? {
+        h.dark_receiver_floor = Some(d);
     }
     let a = &mut p.adaptive;
     a.levels = loc.positive_int(&r.adaptive_levels, "adaptive_levels", 0, 6, a.levels)?;

@@ -123,6 +123,9 @@ pub struct HierarchyParams {
     /// Bytes nodes and links may take. Refinement stops (keeping coarser links) at the budget.
     pub memory_bytes: usize,
     pub seed: u64,
+    /// δ: from the second pass on, a receiver darker than Ē keeps the share clamp(B_R/Ē, δ, 1) of
+    /// the allowed error (`refine::dark_receiver_share`); 1 turns it off.
+    pub dark_receiver_floor: f64,
 }
 
 /// Scenes with fewer input triangles than this get twice their preset's visibility rays.
@@ -179,6 +182,15 @@ pub fn scene_min_element_divisor(diagonal: f32, shortest_edge: f32) -> f32 {
     }
 }
 
+/// The presets' δ (`HierarchyParams::dark_receiver_floor`, the scene key `dark_receiver_floor`): 1,
+/// every receiver judged by ε·Ē alike. Session 41 (docs/accuracy.md), radiosity mode against the
+/// references at equal CPU time (main's curve over ε interpolated): δ = 1/2 gap_room −20%,
+/// stair_hall −8%, vault_hall −3%, l_room +2%, alcove_hall +2%, but Sponza +6% (0.0525 at 1006
+/// CPU-s against ε = 3.5e-3's 0.0497 at 989); δ = 1/4 gap_room −27%, l_room +9%, alcove_hall +6%.
+/// A scene seen mostly in light that came through an opening gains from 1/2; a lit interior does
+/// not, so the presets keep 1.
+pub const DARK_RECEIVER_FLOOR: f64 = 1.0;
+
 impl Default for HierarchyParams {
     /// Six of the 8 GB the issue allows go to nodes and links; the rest is the scene, the BVH and the
     /// output mesh.
@@ -193,6 +205,7 @@ impl Default for HierarchyParams {
             refinement_passes: 3,
             memory_bytes: 6 << 30,
             seed: 0,
+            dark_receiver_floor: DARK_RECEIVER_FLOOR,
         }
     }
 }
@@ -212,6 +225,9 @@ impl HierarchyParams {
         let bad = |name, value: String, expected| Err(HierarchyError::InvalidParameter { name, value, expected });
         if !(self.error_threshold > 0.0) || !self.error_threshold.is_finite() {
             return bad("error_threshold", self.error_threshold.to_string(), "expected a positive number");
+        }
+        if !(self.dark_receiver_floor > 0.0 && self.dark_receiver_floor <= 1.0) {
+            return bad("dark_receiver_floor", self.dark_receiver_floor.to_string(), "expected a number in (0, 1]");
         }
         if !(self.min_element_divisor >= 1.0) || !self.min_element_divisor.is_finite() {
             return bad("min_element_divisor", self.min_element_divisor.to_string(), "expected a number ≥ 1");
@@ -494,7 +510,11 @@ pub fn solve_logged(
         floor_area: min_element_area,
         min_element_area,
         budget_bytes: params.memory_bytes,
+        reference_exitance,
+        dark_receiver_floor: 1.0,
     };
+    // From the second pass on the exitance is solved, and dark receivers are held to a relative error.
+    let solved_settings = RefineSettings { dark_receiver_floor: params.dark_receiver_floor, ..settings };
     if reuse.is_none() {
         // Where an object rests on an element, split it down to the minimum size along the contact
         // and keep the enclosed part out of what the element sends and shows (`contact`).
@@ -566,7 +586,7 @@ pub fn solve_logged(
                     &ctx,
                     records,
                     self_links,
-                    &settings,
+                    if pass == 1 { &settings } else { &solved_settings },
                     hooks,
                     &mut |round, kept, count| {
                         on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })
@@ -593,13 +613,20 @@ pub fn solve_logged(
             sweep_pass(&mut nodes, &links, &mut first, root, params, 1, &mut stats, hooks.stop, on_progress)?;
             scales = Some(first);
             for pass in 2..=params.refinement_passes {
-                let ratio = |n: &Nodes, l: &LinkRecord, threshold: f64| {
-                    refinement_error(n, l) / (threshold * n.area[l.receiver as usize].max(settings.floor_area) as f64)
+                // The kept solve's settings: its threshold ε·Ē, with Ē from its own emission.
+                let kept_settings = RefineSettings {
+                    threshold: kept.threshold,
+                    reference_exitance: kept.threshold / params.error_threshold,
+                    ..solved_settings
+                };
+                let ratio = |n: &Nodes, l: &LinkRecord, settings: &RefineSettings| {
+                    let r = l.receiver as usize;
+                    refinement_error(n, l) / settings.allowed_error_w(n.area[r], n.exitance_mean[r])
                 };
                 let (active, frozen): (Vec<LinkRecord>, Vec<LinkRecord>) =
                     links.to_records().into_iter().partition(|l| {
-                        let new = ratio(&nodes, l, settings.threshold);
-                        new > 1.0 && new > (1.0 + REUSE_GROWTH) * ratio(&kept.nodes, l, kept.threshold)
+                        let new = ratio(&nodes, l, &solved_settings);
+                        new > 1.0 && new > (1.0 + REUSE_GROWTH) * ratio(&kept.nodes, l, &kept_settings)
                     });
                 if active.is_empty() {
                     break;
@@ -609,7 +636,7 @@ pub fn solve_logged(
                     &ctx,
                     active,
                     Vec::new(),
-                    &settings,
+                    &solved_settings,
                     hooks,
                     &mut |round, kept, count| {
                         on_progress(HierarchyProgress::Refining { pass, round, links: kept, nodes: count })

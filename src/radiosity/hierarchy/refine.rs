@@ -29,21 +29,48 @@ pub struct RefineSettings {
     pub min_element_area: f32,
     /// Bytes the nodes and links may take.
     pub budget_bytes: usize,
+    /// Ē, the scene's mean emitted exitance (W/m²) that `threshold` is ε times.
+    pub reference_exitance: f64,
+    /// δ of `dark_receiver_share`: the least share of the allowed error a receiver darker than Ē
+    /// keeps; 1 judges every receiver alike (the first pass, which knows no exitance but the
+    /// emission).
+    pub dark_receiver_floor: f64,
 }
 
 impl RefineSettings {
-    /// The error (W) a link to a receiver of area `receiver_area` may keep:
+    /// The error (W) a link to a receiver of area `receiver_area` and exitance `receiver_exitance`
+    /// (W/m², mean channel) may keep:
     ///
-    /// ε_max = threshold · max(A_R, floor_area).
+    /// ε_max = threshold · max(A_R, floor_area) · s(B_R),
     ///
-    /// Above the floor this is the exitance criterion ρ_R·B_S·ΔF ≤ ε·Ē (each receiver resolved to
-    /// the same relative accuracy, which the furnace and per-surface agreement need); below it, a
-    /// power criterion A_R·ρ_R·B_S·ΔF ≤ ε·Ē·A_floor, so that the many tiny input triangles of a
-    /// tessellated object are served by their clusters' links and the link count does not grow with
-    /// the triangle count. A dark link (B_S = 0 or ρ_R = 0) has error 0 and is never refined.
-    pub fn allowed_error_w(&self, receiver_area: f32) -> f64 {
-        self.threshold * receiver_area.max(self.floor_area) as f64
+    /// s the `dark_receiver_share`. Above the floor this is the exitance criterion ρ_R·B_S·ΔF ≤ ε·Ē
+    /// (each receiver resolved to the same relative accuracy, which the furnace and per-surface
+    /// agreement need); below it, a power criterion A_R·ρ_R·B_S·ΔF ≤ ε·Ē·A_floor, so that the many
+    /// tiny input triangles of a tessellated object are served by their clusters' links and the link
+    /// count does not grow with the triangle count. A dark link (B_S = 0 or ρ_R = 0) has error 0 and
+    /// is never refined.
+    pub fn allowed_error_w(&self, receiver_area: f32, receiver_exitance: f64) -> f64 {
+        let share = dark_receiver_share(receiver_exitance, self.reference_exitance, self.dark_receiver_floor);
+        self.threshold * receiver_area.max(self.floor_area) as f64 * share
     }
+}
+
+/// The share of the allowed error ε·Ē a receiver of exitance B_R keeps:
+///
+/// s = clamp(B_R / Ē, δ, 1),
+///
+/// Ē the scene's mean emitted exitance and δ = `floor` (1: every receiver alike). A receiver at
+/// least as bright as Ē keeps the whole error; a darker one is held to the same error *relative to
+/// its own exitance*, down to δ·ε·Ē. An absolute error ε·Ē is a large relative one where the light
+/// is dim: in gap_room's second room, every path of which passes a door gap, the median exitance is
+/// 0.34 W/m² against Ē = 5.2 W/m², so ε·Ē was 8% of it; the image showed bright concave edges and
+/// streaks fanning from the gap. The pixel error a viewer sees, and the relMSE of the accuracy suite,
+/// are relative (docs/accuracy.md, session 41).
+pub fn dark_receiver_share(receiver_exitance: f64, reference_exitance: f64, floor: f64) -> f64 {
+    if !(floor < 1.0) || !(reference_exitance > 0.0) {
+        return 1.0;
+    }
+    (receiver_exitance / reference_exitance).clamp(floor, 1.0)
 }
 
 /// What a refinement pass produced.
@@ -217,7 +244,7 @@ pub fn refine_logged(
             let compute = |i: usize| {
                 let p = &next[i];
                 let (r, s) = (p.receiver as usize, p.source as usize);
-                let threshold_w = settings.allowed_error_w(nodes.area[r]);
+                let threshold_w = settings.allowed_error_w(nodes.area[r], nodes.exitance_mean[r]);
                 estimate_shared(shared, &paths, nodes, ctx, r, s, p.spread_cap, threshold_w, settings.min_element_area)
             };
             estimate_links(EstimateKind::Link, &pairs, &compute, hooks)?
@@ -274,7 +301,7 @@ enum Decision {
 /// when the decisions are applied, in link order.
 fn decide(nodes: &Nodes, link: &LinkRecord, settings: &RefineSettings) -> Decision {
     let (r, s) = (link.receiver as usize, link.source as usize);
-    if !(refinement_error(nodes, link) > settings.allowed_error_w(nodes.area[r])) {
+    if !(refinement_error(nodes, link) > settings.allowed_error_w(nodes.area[r], nodes.exitance_mean[r])) {
         return Decision::Keep;
     }
     if r == s {
