@@ -118,7 +118,10 @@ pub fn geometry_key(scene: &SceneDescription, params: &HierarchyParams) -> u64 {
     h.write_u64(params.max_sweeps as u64);
     h.write_u64(params.memory_bytes as u64);
     h.write_u64(params.seed);
-    h.write_u64(params.dark_receiver_floor.to_bits());
+    // Only when set, so that the keys of kept links and solution files from before it stay valid.
+    if params.dark_receiver_floor != 1.0 {
+        h.write_u64(params.dark_receiver_floor.to_bits());
+    }
     h.finish()
 }
 
