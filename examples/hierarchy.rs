@@ -50,6 +50,9 @@ fn main() -> ExitCode {
         HierarchyProgress::TracingPhotons { pass, sources } => {
             eprintln!("[{:7.1}s] pass {pass}: tracing photons ({sources:?})", start.elapsed().as_secs_f64())
         }
+        HierarchyProgress::Correcting { pass, round } => {
+            eprintln!("[{:7.1}s] pass {pass}: ray correction, round {round}", start.elapsed().as_secs_f64())
+        }
         HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
             if sweep % 10 == 0 {
                 eprintln!(

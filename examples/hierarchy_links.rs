@@ -1561,12 +1561,8 @@ impl LeafTracer {
         use radray::radiosity::hierarchy::visibility::triangle_point;
         use radray::transport::hit::leave_surface;
         let n = nodes.normal[e];
-        let (t, b) = n.any_orthonormal_pair();
         let p = triangle_point(&nodes.corners[e], uniform(), uniform());
-        let (u1, u2) = (uniform(), uniform());
-        let r = u1.sqrt();
-        let phi = std::f32::consts::TAU * u2;
-        let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+        let d = radray::radiosity::hierarchy::ray_correction::cosine_direction(n, uniform(), uniform());
         let origin = leave_surface(p, n, offset);
         let hits = [
             self.accel_front.closest_hit(origin, d, 0.0, f32::INFINITY).map(|h| (h.t, self.front[h.triangle as usize])),

@@ -73,6 +73,7 @@ pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
         }),
         refinement_passes: h.refinement_passes.unwrap_or(defaults.refinement_passes),
         dark_receiver_floor: h.dark_receiver_floor.unwrap_or(defaults.dark_receiver_floor),
+        correction_rays: h.correction_rays.unwrap_or(defaults.correction_rays),
         tolerance: scene.radiosity.tolerance,
         memory_bytes: usize::try_from(h.memory_bytes / 4 * 3).unwrap_or(usize::MAX),
         seed: scene.radiosity.seed,
@@ -149,6 +150,11 @@ pub fn scene_fingerprint(scene: &SceneDescription, params: &HierarchyParams, tex
     }
     if textures.is_textured() {
         h.write_u64(textures.digest());
+    }
+    // The ray correction changes the solution, not the links; only a setting other than the
+    // default's is hashed, so that solution files from before it stay valid.
+    if params.correction_rays != hierarchy::CORRECTION_RAYS {
+        h.write_u64(params.correction_rays as u64);
     }
     h.finish()
 }
@@ -360,6 +366,9 @@ impl PassOneMethod for Hierarchical {
                 HierarchyProgress::TracingPhotons { pass, sources } => {
                     stage.set_message(format!("pass {pass}: {}", photons_message(sources)));
                 }
+                HierarchyProgress::Correcting { pass, round } => {
+                    stage.set_message(format!("pass {pass}: measuring the indirect light with rays ({round}/2)"));
+                }
                 HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
                     let relative = if max_exitance > 0.0 { max_change / max_exitance } else { 0.0 };
                     stage.set_message(format!(
@@ -552,7 +561,7 @@ impl Hierarchical {
                     shard.count,
                     photons_message(sources)
                 )),
-                HierarchyProgress::Sweeping { .. } => {}
+                HierarchyProgress::Sweeping { .. } | HierarchyProgress::Correcting { .. } => {}
             });
         let (solved, _) = match solved {
             Err(HierarchyError::Stopped) => {

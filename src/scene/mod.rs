@@ -288,6 +288,9 @@ pub struct HierarchySettings {
     /// exitance is held to an error relative to its own exitance, down to δ·ε; `None`: the preset's
     /// (1, off).
     pub dark_receiver_floor: Option<f64>,
+    /// Cosine rays per leaf for the hierarchy's ray correction of the indirect light (0: off);
+    /// `None`: the preset's.
+    pub correction_rays: Option<u32>,
 }
 
 /// 8 GB, the budget for pass one.
@@ -303,6 +306,7 @@ impl Default for HierarchySettings {
             visibility_rays: None,
             refinement_passes: None,
             dark_receiver_floor: None,
+            correction_rays: None,
         }
     }
 }

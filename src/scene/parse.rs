@@ -97,6 +97,7 @@ struct RawRadiosity {
     visibility_rays: Option<S<i64>>,
     refinement_passes: Option<S<i64>>,
     dark_receiver_floor: Option<S<f64>>,
+    correction_rays: Option<S<i64>>,
     adaptive_levels: Option<S<i64>>,
     adaptive_threshold: Option<S<f64>>,
     auto_adaptive: Option<bool>,
@@ -592,6 +593,9 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
     }
     if let Some(d) = loc.ranged(&r.dark_receiver_floor, "dark_receiver_floor", |x| x > 0.0 && x <= 1.0, "in (0, 1]")? {
         h.dark_receiver_floor = Some(d);
+    }
+    if r.correction_rays.is_some() {
+        h.correction_rays = Some(loc.positive_int(&r.correction_rays, "correction_rays", 0, 4096, 0)?);
     }
     let a = &mut p.adaptive;
     a.levels = loc.positive_int(&r.adaptive_levels, "adaptive_levels", 0, 6, a.levels)?;

@@ -234,6 +234,8 @@ pub struct ArrivalScales {
     /// Leaves whose gain is below 1, and the largest row sum of any leaf (0 until `bound_rows`).
     bounded_leaves: usize,
     max_row_sum: f64,
+    /// The leaves' indirect irradiance corrected by cosine rays (`ray_correction`); none until set.
+    correction: Option<super::ray_correction::IndirectCorrection>,
 }
 
 // A share's member index is a byte.
@@ -375,6 +377,22 @@ impl ArrivalScales {
         self.leaf_gain = gains.per_node(nodes.len());
         self.bounded_leaves = gains.scaled.len();
         self.max_row_sum = gains.max_row_sum;
+    }
+
+    /// Sets (or clears) the leaves' ray-measured correction of their indirect irradiance.
+    pub fn set_correction(&mut self, correction: Option<super::ray_correction::IndirectCorrection>) {
+        self.correction = correction;
+    }
+
+    /// The correction `set_correction` gave, if any.
+    pub fn correction(&self) -> Option<&super::ray_correction::IndirectCorrection> {
+        self.correction.as_ref()
+    }
+
+    /// Leaf `n`'s irradiance `gathered` (after its gain) with its indirect part corrected
+    /// (`ray_correction::IndirectCorrection::apply`); `gathered` itself when nothing is set.
+    pub fn corrected(&self, n: usize, gathered: DVec3) -> DVec3 {
+        self.correction.as_ref().map_or(gathered, |c| c.apply(n, gathered))
     }
 
     /// Whether `bound_rows` has been called.

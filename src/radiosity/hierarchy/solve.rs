@@ -64,7 +64,7 @@ pub fn sweep(
         let g = push_step(nodes, n, down, own_uniform, std::mem::take(&mut pending[n]), &arrivals);
         if nodes.is_leaf(n) {
             let old = nodes.exitance[n];
-            let gathered = g.uniform * scales.leaf_gain(n);
+            let gathered = scales.corrected(n, g.uniform * scales.leaf_gain(n));
             let new =
                 leaf_exitance(nodes.source_exitance(n), nodes.reflectance[n].as_dvec3(), gathered, old, relaxation);
             nodes.exitance[n] = new;
@@ -79,6 +79,38 @@ pub fn sweep(
         }
     }
     change
+}
+
+/// What each leaf below `root` gathers over its links (before its gain) with every node sending
+/// `exitance`: the irradiance G_i = Σ_j F_ij B_j a sweep would push to it (`sweep`'s gather and push,
+/// `lobes` the clusters' directional exitance or none), without changing anything. Zero for inner
+/// nodes. Serial and in a fixed order.
+pub fn leaf_irradiance(
+    nodes: &Nodes,
+    links: &Links,
+    scales: &ArrivalScales,
+    exitance: &[DVec3],
+    lobes: Option<&Lobes>,
+    root: usize,
+) -> Vec<DVec3> {
+    let mut out = vec![DVec3::ZERO; nodes.len()];
+    let (mut arrivals, mut direct) = (Vec::new(), Vec::new());
+    let mut pending = vec![DVec3::ZERO; nodes.len()];
+    let mut stack: Vec<(usize, Pushed)> = vec![(root, Pushed::default())];
+    while let Some((n, down)) = stack.pop() {
+        arrivals.truncate(down.hi);
+        let (own_uniform, _) = gather_into(nodes, links, scales, n, exitance, lobes, &mut arrivals, &mut direct);
+        for (m, g) in direct.drain(..) {
+            pending[m] += g;
+        }
+        let g = push_step(nodes, n, down, own_uniform, std::mem::take(&mut pending[n]), &arrivals);
+        if nodes.is_leaf(n) {
+            out[n] = g.uniform;
+        } else {
+            stack.extend(nodes.children(n).rev().map(|c| (c, g)));
+        }
+    }
+    out
 }
 
 /// Sweeps until the largest leaf change is below `tolerance` × the largest leaf exitance, or

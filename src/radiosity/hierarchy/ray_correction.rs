@@ -1,0 +1,312 @@
+//! The leaves' indirect irradiance measured by cosine rays, and the gain that corrects what the
+//! links bring of it.
+//!
+//! A leaf i gathers G_i = Σ_j F_ij B_j over its links. The part D_i of it that the sources' own
+//! light S = E + ρ·E_c brings (emission, reflected caustics) is what the links measure best: the
+//! lamps' links are refined hardest. The rest, the interreflected light I_i = G_i − D_i, comes
+//! from links between large, close clusters whose sampled form factors are noisy, and refinement
+//! keeps the ones whose samples came out low (docs/accuracy.md, sessions 25–29): on Crytek Sponza
+//! the leaves' links see 65% of the hemisphere the rays see, and the radiosity image is a quarter
+//! too dark, the deficit compounding over the bounces of its high albedo.
+//!
+//! Cosine rays from a leaf that read the exitance of the leaf they hit, less its own light, give an
+//! unbiased estimate of the same indirect irradiance,
+//!
+//! Î_i = (1/N) Σ_k (B − S)(hit_k),
+//!
+//! noisy per leaf but not by the links' selection. Over a group of neighbouring leaves (a node with
+//! at most `GROUP_LEAVES` leaves below it) the ratio
+//!
+//! γ = Σ_i A_i w_i·Î_i / Σ_i A_i w_i·(G_i − D_i)
+//!
+//! (A_i the open area, w_i the leaf's reflectance as channel weights) says by how much the links
+//! under- or overstate it there, and the sweeps then gather G'_i = D_i + γ·(G_i − D_i): the direct
+//! light as the links measure it, the indirect light scaled to what the rays see. γ is shrunk
+//! towards 1 by its own noise (σ_γ from the rays' sample variance), so that a group the rays cannot
+//! tell from its links keeps them as they are.
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use super::gather::ArrivalScales;
+use super::links::Links;
+use super::lobes::Lobes;
+use super::nodes::{Nodes, NONE};
+use super::solve::{leaf_irradiance, reset_to_emission};
+use super::visibility::triangle_point;
+use crate::accel::Accel;
+use crate::transport::hit::leave_surface;
+
+/// The most leaves below the node that groups them for one gain. Measured (session 42): groups of
+/// 32 with k = 2 followed the links' local disagreements with the rays and made the rooms worse
+/// (gap_room 8.33e-3 → 1.23e-2, l_room +55%); 256 with k = 3 leaves them within ±6% and corrects
+/// Sponza as much (0.0439; 64 leaves and four rounds: 0.0449).
+pub const GROUP_LEAVES: usize = 256;
+
+/// k: how many standard errors σ a gain must stand from 1 to be kept whole (a James–Stein-like
+/// shrinkage: γ = 1 + δ·max(0, 1 − (k·σ/δ)²), δ = γ̂ − 1).
+pub const SIGNIFICANCE: f64 = 3.0;
+
+/// The largest ρ·γ·R a gain may give a leaf of row sum R.
+pub const MAX_ROW_REFLECTION: f64 = 0.95;
+
+/// The range a gain is clamped to.
+pub const GAIN_RANGE: (f64, f64) = (0.25, 4.0);
+
+/// Per node: the irradiance the links bring of the sources' own light, and the gain on the rest.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct IndirectCorrection {
+    /// D_i per node (leaves; zero elsewhere).
+    pub direct: Vec<DVec3>,
+    /// γ per node (1 where nothing is corrected).
+    pub gain: Vec<f32>,
+}
+
+impl IndirectCorrection {
+    /// G' = D + γ·(G − D) for leaf `n` that gathered G.
+    pub fn apply(&self, n: usize, gathered: DVec3) -> DVec3 {
+        let g = self.gain.get(n).copied().unwrap_or(1.0) as f64;
+        if g == 1.0 {
+            return gathered;
+        }
+        let d = self.direct[n];
+        (d + (gathered - d) * g).max(DVec3::ZERO)
+    }
+}
+
+/// What one measurement found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CorrectionStats {
+    pub groups: usize,
+    /// Groups whose gain is not 1 after shrinkage.
+    pub corrected: usize,
+    /// Σ A·γ / Σ A over the receiving leaves.
+    pub mean_gain: f64,
+    pub rays: u64,
+    /// Leaves whose gain the row bound lowered.
+    pub capped: usize,
+}
+
+/// Where a ray from a leaf ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayEnd {
+    /// On leaf l, facing the ray.
+    Facing(usize),
+    /// On the back of a one-sided leaf.
+    Behind,
+    /// Nowhere: it left the scene.
+    Escaped,
+}
+
+/// Rays against the leaves, one accelerator per sheet: a two-sided sheet's front and back leaves
+/// coincide, and a ray sees the one that faces it.
+pub struct LeafTracer {
+    front: Vec<usize>,
+    back: Vec<usize>,
+    accel_front: Accel,
+    accel_back: Accel,
+}
+
+impl LeafTracer {
+    /// `back[input]`: whether an input triangle is the back sheet of a two-sided surface.
+    pub fn new(nodes: &Nodes, back: &[bool], leaves: &[usize]) -> LeafTracer {
+        let (back, front): (Vec<usize>, Vec<usize>) =
+            leaves.iter().copied().partition(|&n| back[nodes.input[n] as usize]);
+        let accel_of = |sheet: &[usize]| {
+            let positions: Vec<Vec3> = sheet.iter().flat_map(|&n| nodes.corners[n]).collect();
+            let triangles: Vec<[u32; 3]> = (0..sheet.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+            Accel::build(&positions, &triangles)
+        };
+        let (accel_front, accel_back) = (accel_of(&front), accel_of(&back));
+        LeafTracer { front, back, accel_front, accel_back }
+    }
+
+    /// Where a ray from `origin` along `d` ends: the first occluder `occluders` (the scene's opaque
+    /// triangles: a cut-out is no leaf a ray stops at) puts in its way, and there the leaf facing the
+    /// ray (the two sheets of a two-sided surface coincide).
+    pub fn cosine_ray(&self, nodes: &Nodes, occluders: &Accel, origin: Vec3, d: Vec3) -> RayEnd {
+        let Some(hit) = occluders.closest_hit(origin, d, 0.0, f32::INFINITY) else {
+            return RayEnd::Escaped;
+        };
+        let tolerance = (hit.t * 1e-3).max(1e-6);
+        let (lo, hi) = ((hit.t - tolerance).max(0.0), hit.t + tolerance);
+        let faces = |l: usize| nodes.normal[l].dot(d) < 0.0;
+        let found = [(&self.accel_front, &self.front), (&self.accel_back, &self.back)].into_iter().find_map(
+            |(accel, sheet)| {
+                let l = sheet[accel.closest_hit(origin, d, lo, hi)?.triangle as usize];
+                faces(l).then_some(l)
+            },
+        );
+        match found {
+            Some(l) => RayEnd::Facing(l),
+            None => RayEnd::Behind,
+        }
+    }
+}
+
+/// A direction about unit normal `n` with density cos θ / π from two uniform numbers (Malley's
+/// method): r = √u₁, φ = 2π·u₂, d = r cos φ·t + r sin φ·b + √(1 − u₁)·n, (t, b) any tangent frame.
+pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let (t, b) = n.any_orthonormal_pair();
+    let r = u1.sqrt();
+    let phi = std::f32::consts::TAU * u2;
+    t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()
+}
+
+/// Measures the correction at the nodes' current exitance (see the module): `rays` cosine rays per
+/// receiving leaf, seeded by `seed` and the leaf, their origins `offset` off the leaf. Leaves the
+/// nodes' exitance as it found it.
+#[allow(clippy::too_many_arguments)]
+pub fn measure(
+    nodes: &mut Nodes,
+    back: &[bool],
+    occluders: &Accel,
+    links: &Links,
+    scales: &ArrivalScales,
+    root: usize,
+    rays: u32,
+    seed: u64,
+    offset: f32,
+) -> (IndirectCorrection, CorrectionStats) {
+    let lobes = Lobes::new(nodes, links, root);
+    let gathered = leaf_irradiance(nodes, links, scales, &nodes.exitance, Some(&lobes), root);
+    drop(lobes);
+    let saved: Vec<DVec3> = nodes.exitance.clone();
+    reset_to_emission(nodes, root);
+    let source_lobes = Lobes::new(nodes, links, root);
+    let direct = leaf_irradiance(nodes, links, scales, &nodes.exitance, Some(&source_lobes), root);
+    drop(source_lobes);
+    for (n, b) in saved.into_iter().enumerate() {
+        nodes.exitance[n] = b;
+        nodes.exitance_mean[n] = super::nodes::mean_channel(b);
+    }
+
+    let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
+    let tracer = LeafTracer::new(nodes, back, &leaves);
+    let nodes_ref: &Nodes = nodes;
+    // Per leaf: (Σ_k r_k, Σ_k r_k²) of the rays' weighted reads r = w·(B − S)(hit).
+    let reads: Vec<(f64, f64, u32)> = leaves
+        .par_iter()
+        .map(|&e| {
+            let w = nodes_ref.reflectance[e].as_dvec3();
+            let w_sum = w.x + w.y + w.z;
+            if !(nodes_ref.open_area[e] > 0.0) || !(w_sum > 0.0) {
+                return (0.0, 0.0, 0);
+            }
+            let mut state = crate::rng::splitmix64(seed ^ (e as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+            let mut uniform = || {
+                state = crate::rng::splitmix64(state);
+                (state >> 40) as f32 / (1u64 << 24) as f32
+            };
+            let n = nodes_ref.normal[e];
+            let (mut sum, mut sum_sq, mut valid) = (0.0f64, 0.0f64, 0u32);
+            let partly_hidden = nodes_ref.open_area[e] < nodes_ref.area[e];
+            for _ in 0..rays {
+                let p = triangle_point(&nodes_ref.corners[e], uniform(), uniform());
+                let d = cosine_direction(n, uniform(), uniform());
+                let origin = leave_surface(p, n, offset);
+                match tracer.cosine_ray(nodes_ref, occluders, origin, d) {
+                    RayEnd::Facing(l) => {
+                        let read = (nodes_ref.exitance[l] - nodes_ref.source_exitance(l)).max(DVec3::ZERO);
+                        let r = w.dot(read) / w_sum;
+                        sum += r;
+                        sum_sq += r * r;
+                    }
+                    // From the hidden part of a leaf partly inside an object resting on it: not a
+                    // sample of the open part its links gather for.
+                    RayEnd::Behind if partly_hidden => continue,
+                    RayEnd::Behind | RayEnd::Escaped => {}
+                }
+                valid += 1;
+            }
+            (sum, sum_sq, valid)
+        })
+        .collect();
+
+    // Leaves below each node; children have higher indices than their parent.
+    let mut count = vec![0usize; nodes.len()];
+    for &e in &leaves {
+        count[e] = 1;
+    }
+    for n in (0..nodes.len()).rev() {
+        let p = nodes.parent[n];
+        if p != NONE {
+            count[p as usize] += count[n];
+        }
+    }
+    let group_of = |e: usize| {
+        let mut g = e;
+        while nodes.parent[g] != NONE && count[nodes.parent[g] as usize] <= GROUP_LEAVES {
+            g = nodes.parent[g] as usize;
+        }
+        g
+    };
+    // Per group: (Σ A·Î, Σ A·(G − D), Σ A²·var(Î)).
+    let mut sums: rustc_hash::FxHashMap<usize, (f64, f64, f64)> = Default::default();
+    let mut order: Vec<usize> = Vec::new();
+    for (i, &e) in leaves.iter().enumerate() {
+        let w = nodes.reflectance[e].as_dvec3();
+        let w_sum = w.x + w.y + w.z;
+        let a = nodes.open_area[e] as f64;
+        if !(a > 0.0) || !(w_sum > 0.0) {
+            continue;
+        }
+        let (sum, sum_sq, valid) = reads[i];
+        if valid == 0 {
+            continue;
+        }
+        let n_rays = valid as f64;
+        let mean = sum / n_rays;
+        let variance = (sum_sq / n_rays - mean * mean).max(0.0) / (n_rays - 1.0).max(1.0);
+        let links_indirect = w.dot((gathered[e] - direct[e]).max(DVec3::ZERO)) / w_sum;
+        let g = group_of(e);
+        let entry = sums.entry(g).or_insert_with(|| {
+            order.push(g);
+            (0.0, 0.0, 0.0)
+        });
+        entry.0 += a * mean;
+        entry.1 += a * links_indirect;
+        entry.2 += a * a * variance;
+    }
+    let mut gain_of_group: rustc_hash::FxHashMap<usize, f32> = Default::default();
+    let mut stats =
+        CorrectionStats { groups: order.len(), rays: leaves.len() as u64 * rays as u64, ..Default::default() };
+    for &g in &order {
+        let (rays_sum, links_sum, variance) = sums[&g];
+        let gain = if links_sum > 0.0 {
+            let estimate = rays_sum / links_sum;
+            let sigma = variance.sqrt() / links_sum;
+            let delta = estimate - 1.0;
+            let keep = if delta != 0.0 { (1.0 - (SIGNIFICANCE * sigma / delta).powi(2)).max(0.0) } else { 0.0 };
+            (1.0 + delta * keep).clamp(GAIN_RANGE.0, GAIN_RANGE.1)
+        } else {
+            1.0
+        };
+        if gain != 1.0 {
+            stats.corrected += 1;
+        }
+        gain_of_group.insert(g, gain as f32);
+    }
+    // A gain never lets a leaf reflect all it gathers (ρ·γ·R < 1, R its row sum): the sweeps would
+    // diverge (`row_sums`).
+    let row = super::row_sums::row_sums(nodes, links, scales);
+    let mut gain = vec![1.0f32; nodes.len()];
+    let (mut weighted, mut area) = (0.0f64, 0.0f64);
+    for &e in &leaves {
+        let a = nodes.open_area[e] as f64;
+        if let Some(&g) = gain_of_group.get(&group_of(e)) {
+            let bound = MAX_ROW_REFLECTION / (nodes.reflectance_max[e] as f64 * row[e]).max(1e-12);
+            let g = if g > 1.0 && (g as f64) > bound {
+                stats.capped += 1;
+                bound.max(1.0) as f32
+            } else {
+                g
+            };
+            gain[e] = g;
+            weighted += a * g as f64;
+            area += a;
+        }
+    }
+    stats.mean_gain = if area > 0.0 { weighted / area } else { 1.0 };
+    (IndirectCorrection { direct, gain }, stats)
+}
