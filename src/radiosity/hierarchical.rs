@@ -367,7 +367,9 @@ impl PassOneMethod for Hierarchical {
                     stage.set_message(format!("pass {pass}: {}", photons_message(sources)));
                 }
                 HierarchyProgress::Correcting { pass, round } => {
-                    stage.set_message(format!("pass {pass}: measuring the indirect light with rays ({round}/2)"));
+                    let rounds = hierarchy::CORRECTION_ROUNDS;
+                    stage
+                        .set_message(format!("pass {pass}: measuring the indirect light with rays ({round}/{rounds})"));
                 }
                 HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
                     let relative = if max_exitance > 0.0 { max_change / max_exitance } else { 0.0 };

@@ -384,11 +384,6 @@ impl ArrivalScales {
         self.correction = correction;
     }
 
-    /// The correction `set_correction` gave, if any.
-    pub fn correction(&self) -> Option<&super::ray_correction::IndirectCorrection> {
-        self.correction.as_ref()
-    }
-
     /// Leaf `n`'s irradiance `gathered` (after its gain) with its indirect part corrected
     /// (`ray_correction::IndirectCorrection::apply`); `gathered` itself when nothing is set.
     pub fn corrected(&self, n: usize, gathered: DVec3) -> DVec3 {
