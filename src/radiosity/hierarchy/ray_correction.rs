@@ -21,9 +21,13 @@
 //!
 //! (A_i the open area, w_i the leaf's reflectance as channel weights) says by how much the links
 //! under- or overstate it there, and the sweeps then gather G'_i = D_i + γ·(G_i − D_i): the direct
-//! light as the links measure it, the indirect light scaled to what the rays see. γ is shrunk
-//! towards 1 by its own noise (σ_γ from the rays' sample variance), so that a group the rays cannot
-//! tell from its links keeps them as they are.
+//! light as the links measure it, the indirect light scaled to what the rays see. The same ratio
+//! over regions `REGION_GROWTH` times larger, and larger again up to the whole tree, is measured
+//! with ever less noise; from the top down each group's γ is shrunk towards its region's by its own
+//! noise (σ_γ from the rays' sample variance, `shrunk_gain`), the whole tree's towards 1. A group
+//! the rays cannot tell from its region takes the region's gain: where the links' deficit is
+//! scene-wide, every group gets it, not only those whose own rays stand out (session 43: shrunk
+//! towards 1, groups at 2–4σ kept a fraction of it and the rooms stayed 1–2% dark).
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -43,8 +47,11 @@ use crate::transport::hit::leave_surface;
 /// Sponza as much (0.0439; 64 leaves and four rounds: 0.0449).
 pub const GROUP_LEAVES: usize = 256;
 
-/// k: how many standard errors σ a gain must stand from 1 to be kept whole (a James–Stein-like
-/// shrinkage: γ = 1 + δ·max(0, 1 − (k·σ/δ)²), δ = γ̂ − 1).
+/// How many times more leaves a region has than the groups or regions it holds (`shrunk_gain`).
+pub const REGION_GROWTH: usize = 16;
+
+/// k: how many standard errors σ a gain must stand from its region's γ_p to be kept whole (a
+/// James–Stein-like shrinkage: γ = γ_p + δ·max(0, 1 − (k·σ/δ)²), δ = γ̂ − γ_p).
 pub const SIGNIFICANCE: f64 = 3.0;
 
 /// The largest ρ·γ·R a gain may give a leaf of row sum R.
@@ -52,6 +59,20 @@ pub const MAX_ROW_REFLECTION: f64 = 0.95;
 
 /// The range a gain is clamped to.
 pub const GAIN_RANGE: (f64, f64) = (0.25, 4.0);
+
+/// A group's gain from its rays' Σ A·Î (`rays_sum`), its links' Σ A·(G − D) (`links_sum`) and the
+/// variance of the former: γ̂ = rays_sum / links_sum, shrunk towards its region's gain γ_p by its
+/// standard error σ, γ = γ_p + δ·max(0, 1 − (k·σ/δ)²) with δ = γ̂ − γ_p, and clamped to `GAIN_RANGE`.
+pub fn shrunk_gain(rays_sum: f64, links_sum: f64, variance: f64, prior: f64) -> f64 {
+    if !(links_sum > 0.0) {
+        return prior;
+    }
+    let estimate = rays_sum / links_sum;
+    let sigma = variance.sqrt() / links_sum;
+    let delta = estimate - prior;
+    let keep = if delta != 0.0 { (1.0 - (SIGNIFICANCE * sigma / delta).powi(2)).max(0.0) } else { 0.0 };
+    (prior + delta * keep).clamp(GAIN_RANGE.0, GAIN_RANGE.1)
+}
 
 /// Per node: the irradiance the links bring of the sources' own light, and the gain on the rest.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -234,16 +255,23 @@ pub fn measure(
             count[p as usize] += count[n];
         }
     }
-    let group_of = |e: usize| {
+    // A leaf's group at size `limit`: its highest ancestor with at most `limit` leaves below.
+    let group_at = |e: usize, limit: usize| {
         let mut g = e;
-        while nodes.parent[g] != NONE && count[nodes.parent[g] as usize] <= GROUP_LEAVES {
+        while nodes.parent[g] != NONE && count[nodes.parent[g] as usize] <= limit {
             g = nodes.parent[g] as usize;
         }
         g
     };
-    // Per group: (Σ A·Î, Σ A·(G − D), Σ A²·var(Î)).
-    let mut sums: rustc_hash::FxHashMap<usize, (f64, f64, f64)> = Default::default();
-    let mut order: Vec<usize> = Vec::new();
+    let group_of = |e: usize| group_at(e, GROUP_LEAVES);
+    // Groups of GROUP_LEAVES, then regions REGION_GROWTH times larger, up to the whole tree.
+    let mut limits = vec![GROUP_LEAVES];
+    while limits[limits.len() - 1] < leaves.len() {
+        limits.push(limits[limits.len() - 1].saturating_mul(REGION_GROWTH));
+    }
+    // Per level and group: (Σ A·Î, Σ A·(G − D), Σ A²·var(Î)), and the group one level up.
+    let mut sums: Vec<rustc_hash::FxHashMap<usize, (f64, f64, f64)>> = vec![Default::default(); limits.len()];
+    let mut up: Vec<rustc_hash::FxHashMap<usize, usize>> = vec![Default::default(); limits.len()];
     for (i, &e) in leaves.iter().enumerate() {
         let w = nodes.reflectance[e].as_dvec3();
         let w_sum = w.x + w.y + w.z;
@@ -259,34 +287,39 @@ pub fn measure(
         let mean = sum / n_rays;
         let variance = (sum_sq / n_rays - mean * mean).max(0.0) / (n_rays - 1.0).max(1.0);
         let links_indirect = w.dot((gathered[e] - direct[e]).max(DVec3::ZERO)) / w_sum;
-        let g = group_of(e);
-        let entry = sums.entry(g).or_insert_with(|| {
-            order.push(g);
-            (0.0, 0.0, 0.0)
-        });
-        entry.0 += a * mean;
-        entry.1 += a * links_indirect;
-        entry.2 += a * a * variance;
-    }
-    let mut gain_of_group: rustc_hash::FxHashMap<usize, f32> = Default::default();
-    let mut stats =
-        CorrectionStats { groups: order.len(), rays: leaves.len() as u64 * rays as u64, ..Default::default() };
-    for &g in &order {
-        let (rays_sum, links_sum, variance) = sums[&g];
-        let gain = if links_sum > 0.0 {
-            let estimate = rays_sum / links_sum;
-            let sigma = variance.sqrt() / links_sum;
-            let delta = estimate - 1.0;
-            let keep = if delta != 0.0 { (1.0 - (SIGNIFICANCE * sigma / delta).powi(2)).max(0.0) } else { 0.0 };
-            (1.0 + delta * keep).clamp(GAIN_RANGE.0, GAIN_RANGE.1)
-        } else {
-            1.0
-        };
-        if gain != 1.0 {
-            stats.corrected += 1;
+        let groups: Vec<usize> = limits.iter().map(|&limit| group_at(e, limit)).collect();
+        for (level, &g) in groups.iter().enumerate() {
+            let entry = sums[level].entry(g).or_insert((0.0, 0.0, 0.0));
+            entry.0 += a * mean;
+            entry.1 += a * links_indirect;
+            entry.2 += a * a * variance;
+            if let Some(&parent) = groups.get(level + 1) {
+                up[level].insert(g, parent);
+            }
         }
-        gain_of_group.insert(g, gain as f32);
     }
+    // From the whole tree down: each group's gain shrunk towards its region's (the top towards 1).
+    let mut gains: Vec<rustc_hash::FxHashMap<usize, f64>> = vec![Default::default(); limits.len()];
+    for level in (0..limits.len()).rev() {
+        let shrunk: rustc_hash::FxHashMap<usize, f64> = sums[level]
+            .iter()
+            .map(|(&g, &(rays_sum, links_sum, variance))| {
+                let prior = match up[level].get(&g) {
+                    Some(parent) => gains[level + 1][parent],
+                    None => 1.0,
+                };
+                (g, shrunk_gain(rays_sum, links_sum, variance, prior))
+            })
+            .collect();
+        gains[level] = shrunk;
+    }
+    let gain_of_group: rustc_hash::FxHashMap<usize, f32> = gains[0].iter().map(|(&g, &v)| (g, v as f32)).collect();
+    let mut stats = CorrectionStats {
+        groups: gain_of_group.len(),
+        corrected: gain_of_group.values().filter(|&&g| g != 1.0).count(),
+        rays: leaves.len() as u64 * rays as u64,
+        ..Default::default()
+    };
     // A gain never lets a leaf reflect all it gathers (ρ·γ·R < 1, R its row sum): the sweeps would
     // diverge (`row_sums`).
     let row = super::row_sums::row_sums(nodes, links, scales);
@@ -309,4 +342,34 @@ pub fn measure(
     }
     stats.mean_gain = if area > 0.0 { weighted / area } else { 1.0 };
     (IndirectCorrection { direct, gain }, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_group_the_rays_cannot_tell_from_its_region_takes_the_regions_gain() {
+        // The region's rays see 1.3 times what its links bring, to 1% (σ = 0.01): δ = 0.3 is 30σ,
+        // kept to 1 − (3/30)² = 99%.
+        let region = shrunk_gain(1.3e4, 1e4, 1e4f64.powi(2) * 0.01f64.powi(2), 1.0);
+        assert!((region - 1.297).abs() < 1e-12, "{region}");
+        // A group of it at 1.35 ± 0.1: 0.05 from its region is half a standard error, so it keeps
+        // the region's gain. Shrunk towards 1 instead (before regions, session 42), it kept a quarter
+        // of its δ = 0.35: 1 + 0.35·(1 − (0.3/0.35)²) = 1.093.
+        let group = shrunk_gain(135.0, 100.0, 100f64.powi(2) * 0.1f64.powi(2), region);
+        assert_eq!(group, region);
+        let towards_one = shrunk_gain(135.0, 100.0, 100f64.powi(2) * 0.1f64.powi(2), 1.0);
+        assert!((towards_one - (1.0 + 0.35 * (1.0 - (0.3f64 / 0.35).powi(2)))).abs() < 1e-12, "{towards_one}");
+    }
+
+    #[test]
+    fn a_group_far_from_its_region_keeps_what_its_rays_measured() {
+        // 0.8 ± 0.02 in a region at 1.3: δ = −0.5 is 25σ, kept to 1 − (3/25)² = 98.6%.
+        let group = shrunk_gain(80.0, 100.0, 100f64.powi(2) * 0.02f64.powi(2), 1.3);
+        assert!((group - (1.3 - 0.5 * (1.0 - (3.0f64 * 0.02 / 0.5).powi(2)))).abs() < 1e-12, "{group}");
+        // Links that bring nothing: the region's gain; estimates beyond the range: clamped.
+        assert_eq!(shrunk_gain(5.0, 0.0, 1.0, 1.2), 1.2);
+        assert_eq!(shrunk_gain(1e6, 1.0, 0.0, 1.0), GAIN_RANGE.1);
+    }
 }
