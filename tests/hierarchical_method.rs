@@ -57,7 +57,7 @@ fn scene_keys_choose_and_tune_the_hierarchy() {
     let path = cornell_with(
         dir.path(),
         "method = \"hierarchical\"\nmemory = \"2GB\"\nerror_threshold = 0.2\nmin_element_size = 5.0\nvisibility_rays = 6\n\
-         dark_receiver_floor = 0.5\ncorrection_rays = 0",
+         dark_receiver_floor = 0.5\ncorrection_rays = 0\ncorrection = \"hemicube\"",
     );
     let s = scene::load(&path).unwrap();
     assert_eq!(s.radiosity.method, MethodChoice::Hierarchical);
@@ -67,8 +67,10 @@ fn scene_keys_choose_and_tune_the_hierarchy() {
     assert_eq!(p.visibility_rays, 6);
     assert_eq!(p.dark_receiver_floor, 0.5);
     assert_eq!(p.correction_rays, 0);
+    assert_eq!(p.correction, radray::scene::CorrectionEstimator::Hemicube);
     // Unset, the presets measure the indirect light with 16 rays per leaf.
     assert_eq!(hierarchy_params(&load("cornell_box.toml")).correction_rays, 16);
+    assert_eq!(hierarchy_params(&load("cornell_box.toml")).correction, radray::scene::CorrectionEstimator::Rays);
     // Unset, every receiver is judged alike (δ = 1).
     assert_eq!(hierarchy_params(&load("cornell_box.toml")).dark_receiver_floor, 1.0);
     // Nodes and links get three quarters of the budget.
@@ -123,6 +125,7 @@ fn bad_hierarchy_keys_are_refused_with_file_and_line() {
         ("dark_receiver_floor = 1.5", "dark_receiver_floor"),
         ("correction_rays = -1", "correction_rays"),
         ("correction_rays = 5000", "correction_rays"),
+        ("correction = \"photons\"", "correction"),
         ("method = \"fastest\"", "method"),
     ] {
         let path = cornell_with(dir.path(), extra);

@@ -74,6 +74,7 @@ pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
         refinement_passes: h.refinement_passes.unwrap_or(defaults.refinement_passes),
         dark_receiver_floor: h.dark_receiver_floor.unwrap_or(defaults.dark_receiver_floor),
         correction_rays: h.correction_rays.unwrap_or(defaults.correction_rays),
+        correction: h.correction.unwrap_or(defaults.correction),
         tolerance: scene.radiosity.tolerance,
         memory_bytes: usize::try_from(h.memory_bytes / 4 * 3).unwrap_or(usize::MAX),
         seed: scene.radiosity.seed,
@@ -155,6 +156,9 @@ pub fn scene_fingerprint(scene: &SceneDescription, params: &HierarchyParams, tex
     // default's is hashed, so that solution files from before it stay valid.
     if params.correction_rays != hierarchy::CORRECTION_RAYS {
         h.write_u64(params.correction_rays as u64);
+    }
+    if params.correction != crate::scene::CorrectionEstimator::Rays {
+        h.write_u64(0xc0);
     }
     h.finish()
 }
@@ -347,6 +351,7 @@ impl PassOneMethod for Hierarchical {
         let mut hooks =
             EstimateHooks { log: &mut log, stop: &stop, after_chunk: &mut after_chunk, shared: shared.as_ref() };
         let tracer = caustic_tracer(scene, mesh.textures.clone());
+        let correction = params.correction;
         let solved = hierarchy::solve_logged(
             scene,
             mesh.textures.clone(),
@@ -368,8 +373,12 @@ impl PassOneMethod for Hierarchical {
                 }
                 HierarchyProgress::Correcting { pass, round } => {
                     let rounds = hierarchy::CORRECTION_ROUNDS;
+                    let by = match correction {
+                        crate::scene::CorrectionEstimator::Rays => "rays",
+                        crate::scene::CorrectionEstimator::Hemicube => "hemicubes",
+                    };
                     stage
-                        .set_message(format!("pass {pass}: measuring the indirect light with rays ({round}/{rounds})"));
+                        .set_message(format!("pass {pass}: measuring the indirect light with {by} ({round}/{rounds})"));
                 }
                 HierarchyProgress::Sweeping { pass, sweep, max_change, max_exitance } => {
                     let relative = if max_exitance > 0.0 { max_change / max_exitance } else { 0.0 };

@@ -291,6 +291,21 @@ pub struct HierarchySettings {
     /// Cosine rays per leaf for the hierarchy's ray correction of the indirect light (0: off);
     /// `None`: the preset's.
     pub correction_rays: Option<u32>,
+    /// How the correction measures the leaves' indirect light; `None`: rays.
+    pub correction: Option<CorrectionEstimator>,
+}
+
+/// How the hierarchy's correction measures the indirect light its links bring (`[radiosity]
+/// correction`, `radiosity::hierarchy::ray_correction`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CorrectionEstimator {
+    /// `correction_rays` cosine rays from every leaf (the default).
+    #[default]
+    Rays,
+    /// A hemicube at some leaves that draws the cluster hierarchy as a cut
+    /// (`radiosity::hierarchy::hemicube_cut`).
+    Hemicube,
 }
 
 /// 8 GB, the budget for pass one.
@@ -307,6 +322,7 @@ impl Default for HierarchySettings {
             refinement_passes: None,
             dark_receiver_floor: None,
             correction_rays: None,
+            correction: None,
         }
     }
 }

@@ -98,6 +98,7 @@ struct RawRadiosity {
     refinement_passes: Option<S<i64>>,
     dark_receiver_floor: Option<S<f64>>,
     correction_rays: Option<S<i64>>,
+    correction: Option<CorrectionEstimator>,
     adaptive_levels: Option<S<i64>>,
     adaptive_threshold: Option<S<f64>>,
     auto_adaptive: Option<bool>,
@@ -596,6 +597,9 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
     }
     if r.correction_rays.is_some() {
         h.correction_rays = Some(loc.positive_int(&r.correction_rays, "correction_rays", 0, 4096, 0)?);
+    }
+    if let Some(c) = r.correction {
+        h.correction = Some(c);
     }
     let a = &mut p.adaptive;
     a.levels = loc.positive_int(&r.adaptive_levels, "adaptive_levels", 0, 6, a.levels)?;

@@ -1,6 +1,7 @@
 //! Link form-factor estimators of the hierarchy: pure functions, no rays (visibility is `visibility`).
 //!
-//! Which estimator serves which link (the hemicube-cut estimator of issue 10 is *not* implemented yet):
+//! Which estimator serves which link (no link is measured by a hemicube; the hemicube cut of issue 10
+//! measures only the indirect light a leaf gathers, for the correction: `hemicube_cut`):
 //! - element ← element: Lambert's exact unoccluded point-to-polygon form factor, averaged over the
 //!   receiver's three-point quadrature rule, or a 48-point rule for near pairs (`element_to_element`),
 //!   times the ray visibility fraction;

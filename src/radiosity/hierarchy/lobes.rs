@@ -160,6 +160,15 @@ impl Lobes {
         self.sent(source, omega)
     }
 
+    /// The projected open area of cluster `source` seen from unit direction `omega` (from the cluster
+    /// to the viewer) by its lobes, P̃(ω) = Σ_a max(0, ω·e_a)·P_a = Σ_m A_open,m Σ_a max(0, ω·e_a)
+    /// max(0, n_m·e_a): exact (Σ_m A_open,m n_m·ω) for members whose normals lie in ω's octant, larger
+    /// for the others. `None` for an element.
+    pub fn projected_towards(&self, source: usize, omega: Vec3) -> Option<f64> {
+        let i = self.slot_of(source)?;
+        Some(AXES.iter().zip(&self.projected[i]).map(|(e, &p)| omega.dot(*e).max(0.0) as f64 * p).sum())
+    }
+
     /// B̂_S(ω) of cluster `source` towards the unit direction `omega` (from the source to the
     /// receiver), or `None` when the source is not a cluster or no member faces ω's lobes.
     pub fn sent(&self, source: usize, omega: Vec3) -> Option<DVec3> {

@@ -16,7 +16,8 @@
 //!   self-link): the element estimator summed over all leaf pairs when there are at most 64, else
 //!   a sampled estimator exact in each sampled source element (`visibility::sampled_form_factor`).
 //!
-//! The hemicube is not used here yet (the hemicube-cut estimator of issue 10 is still to do).
+//! No link is measured by a hemicube; `hemicube_cut` draws the tree as a cut into a hemicube item
+//! buffer to measure the indirect light a leaf gathers, one of the correction's two estimators.
 //!
 //! Light through mirrors and glass, which no link carries, enters as photons landing in the leaves
 //! (`caustics`), traced by the caller (`solve_logged`'s `CausticTracer`).
@@ -31,6 +32,7 @@ pub mod edge_angle;
 pub mod estimates;
 pub mod form_factor;
 pub mod gather;
+pub mod hemicube_cut;
 pub mod interpolate;
 pub mod links;
 pub mod links_file;
@@ -57,7 +59,7 @@ use glam::{DVec3, Vec3};
 
 use crate::accel::Accel;
 use crate::material::SceneTextures;
-use crate::scene::{Material, SceneDescription};
+use crate::scene::{CorrectionEstimator, Material, SceneDescription};
 use caustics::{CausticLight, CausticSources, CausticTracer};
 use contact::{split_at_contacts, ContactProbe};
 use estimates::{EstimateHooks, EstimateLog, Stopped};
@@ -130,6 +132,10 @@ pub struct HierarchyParams {
     /// Cosine rays per leaf that measure the indirect light the links bring (`ray_correction`),
     /// after the last pass; 0 turns the correction off.
     pub correction_rays: u32,
+    /// How the correction measures the leaves' indirect light: `correction_rays` cosine rays per
+    /// leaf, or hemicubes that draw the tree as a cut (`hemicube_cut`, `CUT_RESOLUTION_PX`,
+    /// `CUT_STRIDE`, `CUT_PIXELS`).
+    pub correction: CorrectionEstimator,
 }
 
 /// The presets' rays per leaf of the ray correction (`HierarchyParams::correction_rays`, the scene
@@ -138,6 +144,32 @@ pub struct HierarchyParams {
 /// about 45 s of rays and 9 more sweeps; the rooms within ±6% (l_room −3.5%, rotunda −5.6%,
 /// vault_hall −3.6%, gap_room +2.4%, fixture_room +3.6%, the rest unchanged) at +5–8% CPU-s.
 pub const CORRECTION_RAYS: u32 = 16;
+
+/// The hemicube correction's resolution (pixels across the top face), leaves per hemicube (one leaf
+/// in `CUT_STRIDE`, in tree order: 16 per group of `ray_correction::GROUP_LEAVES`; fewer where that
+/// would be more than `CUT_HEMICUBES` per measurement), and the largest size (pixels) of a node
+/// drawn whole (`hemicube_cut`). Session 44 (docs/accuracy.md), radiosity
+/// mode against the shipped references: l_room 1.781e-4 at 32 / 16 / 1 and 1.820e-4 at 32 / 16 / 2,
+/// against the rays' 1.885e-4, for +40–75% CPU-s; every leaf (stride 1) 1.621e-4 for 15× the CPU-s.
+/// Crytek Sponza at 32 / 64 / 2: 0.0427 against the rays' 0.0413, +43% CPU-s of pass one. Not the
+/// default: it does not pay for its time.
+pub const CUT_RESOLUTION_PX: u32 = 32;
+pub const CUT_STRIDE: u32 = 16;
+pub const CUT_PIXELS: f32 = 2.0;
+pub const CUT_HEMICUBES: u32 = 10_000;
+
+/// The correction's estimator for `params`.
+fn correction_estimator(params: &HierarchyParams) -> ray_correction::IndirectEstimator {
+    match params.correction {
+        CorrectionEstimator::Rays => ray_correction::IndirectEstimator::Rays { rays: params.correction_rays },
+        CorrectionEstimator::Hemicube => ray_correction::IndirectEstimator::Hemicube {
+            resolution_px: CUT_RESOLUTION_PX,
+            stride: CUT_STRIDE,
+            cut_pixels: CUT_PIXELS,
+            max_hemicubes: CUT_HEMICUBES,
+        },
+    }
+}
 
 /// Measure-and-sweep rounds of the ray correction.
 pub const CORRECTION_ROUNDS: u32 = 2;
@@ -224,6 +256,7 @@ impl Default for HierarchyParams {
             seed: 0,
             dark_receiver_floor: DARK_RECEIVER_FLOOR,
             correction_rays: CORRECTION_RAYS,
+            correction: CorrectionEstimator::Rays,
         }
     }
 }
@@ -708,12 +741,12 @@ pub fn solve_logged(
             let seed = params.seed ^ CORRECTION_SEED.wrapping_add(round as u64);
             let (correction, measured) = ray_correction::measure(
                 &mut nodes,
-                &inputs.back,
+                &inputs,
                 ctx.accel,
                 &links,
                 current,
                 root,
-                params.correction_rays,
+                correction_estimator(params),
                 seed,
                 ctx.offset,
             );

@@ -28,17 +28,24 @@
 //! the rays cannot tell from its region takes the region's gain: where the links' deficit is
 //! scene-wide, every group gets it, not only those whose own rays stand out (session 43: shrunk
 //! towards 1, groups at 2–4σ kept a fraction of it and the rooms stayed 1–2% dark).
+//!
+//! `IndirectEstimator::Hemicube` measures Î instead with a hemicube at the centre of some leaves
+//! that draws the tree as a cut (`hemicube_cut`); each group's σ is then its sampled leaves' spread
+//! about the ratio (`sampling_variance`). It agrees with the rays and costs more (session 44).
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use super::clusters::InputTriangles;
 use super::gather::ArrivalScales;
+use super::hemicube_cut::{irradiance_at, two_sided_inputs, CutScene};
 use super::links::Links;
 use super::lobes::Lobes;
 use super::nodes::{Nodes, NONE};
-use super::solve::{leaf_irradiance, reset_to_emission};
+use super::solve::{leaf_irradiance, reset_to_emission, set_leaves};
 use super::visibility::triangle_point;
 use crate::accel::Accel;
+use crate::radiosity::hemicube::{Hemicube, ItemBuffer};
 use crate::transport::hit::leave_surface;
 
 /// The most leaves below the node that groups them for one gain. Measured (session 42): groups of
@@ -178,14 +185,187 @@ pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
 /// receiving leaf, seeded by `seed` and the leaf, their origins `offset` off the leaf. Leaves the
 /// nodes' exitance as it found it.
 #[allow(clippy::too_many_arguments)]
+/// How `measure` estimates a leaf's indirect irradiance Î.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IndirectEstimator {
+    /// `rays` cosine rays from points spread over every leaf, reading the exitance of the leaf hit.
+    Rays { rays: u32 },
+    /// A hemicube of `resolution_px` at the centre of one leaf in `stride` (in tree order; larger
+    /// where that would draw more than `max_hemicubes`), drawing the hierarchy as a cut whose nodes
+    /// are at most `cut_pixels` pixels across (`hemicube_cut`).
+    Hemicube { resolution_px: u32, stride: u32, cut_pixels: f32, max_hemicubes: u32 },
+}
+
+impl IndirectEstimator {
+    /// The estimator for `leaves` leaves: the hemicubes' stride raised to keep to `max_hemicubes`.
+    fn for_leaves(self, leaves: usize) -> IndirectEstimator {
+        match self {
+            IndirectEstimator::Hemicube { resolution_px, stride, cut_pixels, max_hemicubes } => {
+                let needed = leaves.div_ceil(max_hemicubes.max(1) as usize) as u32;
+                IndirectEstimator::Hemicube { resolution_px, stride: stride.max(needed), cut_pixels, max_hemicubes }
+            }
+            rays => rays,
+        }
+    }
+}
+
+/// One leaf's estimate: Î (its reflectance-weighted mean channel) and the variance the group sums
+/// take from it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LeafRead {
+    indirect: f64,
+    variance: f64,
+}
+
+/// Per leaf, `estimator`'s Î, or `None` for a leaf it leaves out (no open area, black, not sampled).
+/// The rays' variance is that of their mean; the hemicubes' is filled in later (`sampling_variance`).
+#[allow(clippy::too_many_arguments)]
+fn leaf_reads(
+    nodes: &mut Nodes,
+    inputs: &InputTriangles,
+    occluders: &Accel,
+    links: &Links,
+    leaves: &[usize],
+    root: usize,
+    estimator: IndirectEstimator,
+    seed: u64,
+    offset: f32,
+) -> Vec<Option<LeafRead>> {
+    let weights = |nodes: &Nodes, e: usize| {
+        let w = nodes.reflectance[e].as_dvec3();
+        let w_sum = w.x + w.y + w.z;
+        (nodes.open_area[e] > 0.0 && w_sum > 0.0).then_some((w, w_sum))
+    };
+    let rng = |e: usize| {
+        let mut state = crate::rng::splitmix64(seed ^ (e as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        move || {
+            state = crate::rng::splitmix64(state);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        }
+    };
+    match estimator {
+        IndirectEstimator::Rays { rays } => {
+            let tracer = LeafTracer::new(nodes, &inputs.back, leaves);
+            let nodes: &Nodes = nodes;
+            leaves
+                .par_iter()
+                .map(|&e| {
+                    let (w, w_sum) = weights(nodes, e)?;
+                    let mut uniform = rng(e);
+                    let n = nodes.normal[e];
+                    let (mut sum, mut sum_sq, mut valid) = (0.0f64, 0.0f64, 0u32);
+                    let partly_hidden = nodes.open_area[e] < nodes.area[e];
+                    for _ in 0..rays {
+                        let p = triangle_point(&nodes.corners[e], uniform(), uniform());
+                        let d = cosine_direction(n, uniform(), uniform());
+                        let origin = leave_surface(p, n, offset);
+                        match tracer.cosine_ray(nodes, occluders, origin, d) {
+                            RayEnd::Facing(l) => {
+                                let read = (nodes.exitance[l] - nodes.source_exitance(l)).max(DVec3::ZERO);
+                                let r = w.dot(read) / w_sum;
+                                sum += r;
+                                sum_sq += r * r;
+                            }
+                            // From the hidden part of a leaf partly inside an object resting on it: not a
+                            // sample of the open part its links gather for.
+                            RayEnd::Behind if partly_hidden => continue,
+                            RayEnd::Behind | RayEnd::Escaped => {}
+                        }
+                        valid += 1;
+                    }
+                    if valid == 0 {
+                        return None;
+                    }
+                    let count = valid as f64;
+                    let mean = sum / count;
+                    let variance = (sum_sq / count - mean * mean).max(0.0) / (count - 1.0).max(1.0);
+                    Some(LeafRead { indirect: mean, variance })
+                })
+                .collect()
+        }
+        IndirectEstimator::Hemicube { resolution_px, stride, cut_pixels, .. } => {
+            // The exitance a hemicube shows: B − S at the leaves, pulled up, and the lobes over it.
+            let saved = nodes.exitance.clone();
+            set_leaves(nodes, root, |nodes, n| (nodes.exitance[n] - nodes.source_exitance(n)).max(DVec3::ZERO));
+            let lobes = Lobes::new(nodes, links, root);
+            let shown = std::mem::replace(&mut nodes.exitance, saved);
+            for n in 0..nodes.len() {
+                nodes.exitance_mean[n] = super::nodes::mean_channel(nodes.exitance[n]);
+            }
+            let two_sided = two_sided_inputs(inputs);
+            let nodes: &Nodes = nodes;
+            let scene = CutScene { nodes, exitance: &shown, lobes: &lobes, two_sided: &two_sided, root };
+            let hc = Hemicube::new(resolution_px);
+            let stride = stride.max(1) as usize;
+            let phase = (seed % stride as u64) as usize;
+            leaves
+                .par_iter()
+                .enumerate()
+                .map_init(
+                    || ItemBuffer::new(&hc),
+                    |buffers, (i, &e)| {
+                        if i % stride != phase || nodes.open_area[e] < nodes.area[e] {
+                            return None;
+                        }
+                        let (w, w_sum) = weights(nodes, e)?;
+                        let mut uniform = rng(e);
+                        let n = nodes.normal[e];
+                        let eye = leave_surface(nodes.centre[e], n, offset);
+                        let rotation = uniform() * std::f32::consts::TAU;
+                        let seen = irradiance_at(&scene, &hc, buffers, eye, n, rotation, cut_pixels);
+                        Some(LeafRead { indirect: w.dot(seen.irradiance) / w_sum, variance: 0.0 })
+                    },
+                )
+                .collect()
+        }
+    }
+}
+
+/// Per leaf, the links' Σ w·(G − D)/Σ w, the indirect irradiance they bring.
+fn links_indirect(nodes: &Nodes, leaves: &[usize], gathered: &[DVec3], direct: &[DVec3]) -> Vec<f64> {
+    leaves
+        .iter()
+        .map(|&e| {
+            let w = nodes.reflectance[e].as_dvec3();
+            let w_sum = w.x + w.y + w.z;
+            if w_sum > 0.0 {
+                w.dot((gathered[e] - direct[e]).max(DVec3::ZERO)) / w_sum
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// The variance a sample of one leaf in `stride` adds to its group's ratio: the ratio estimator's
+/// (Î_i − r·L_i)², r = Σ A·Î / Σ A·L over the whole sample, times the finite-population factor
+/// 1 − 1/stride (a census has none).
+fn sampling_variance(reads: &mut [Option<LeafRead>], links: &[f64], areas: &[f64], stride: u32) {
+    let (mut rays_sum, mut links_sum) = (0.0f64, 0.0f64);
+    for ((read, &l), &a) in reads.iter().zip(links).zip(areas) {
+        if let Some(read) = read {
+            rays_sum += a * read.indirect;
+            links_sum += a * l;
+        }
+    }
+    let ratio = if links_sum > 0.0 { rays_sum / links_sum } else { 1.0 };
+    let factor = 1.0 - 1.0 / stride.max(1) as f64;
+    for (read, &l) in reads.iter_mut().zip(links) {
+        if let Some(read) = read {
+            read.variance = factor * (read.indirect - ratio * l).powi(2);
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 pub fn measure(
     nodes: &mut Nodes,
-    back: &[bool],
+    inputs: &InputTriangles,
     occluders: &Accel,
     links: &Links,
     scales: &ArrivalScales,
     root: usize,
-    rays: u32,
+    estimator: IndirectEstimator,
     seed: u64,
     offset: f32,
 ) -> (IndirectCorrection, CorrectionStats) {
@@ -203,46 +383,17 @@ pub fn measure(
     }
 
     let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n) && !nodes.is_cluster[n]).collect();
-    let tracer = LeafTracer::new(nodes, back, &leaves);
-    let nodes_ref: &Nodes = nodes;
-    // Per leaf: (Σ_k r_k, Σ_k r_k²) of the rays' weighted reads r = w·(B − S)(hit).
-    let reads: Vec<(f64, f64, u32)> = leaves
-        .par_iter()
-        .map(|&e| {
-            let w = nodes_ref.reflectance[e].as_dvec3();
-            let w_sum = w.x + w.y + w.z;
-            if !(nodes_ref.open_area[e] > 0.0) || !(w_sum > 0.0) {
-                return (0.0, 0.0, 0);
-            }
-            let mut state = crate::rng::splitmix64(seed ^ (e as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
-            let mut uniform = || {
-                state = crate::rng::splitmix64(state);
-                (state >> 40) as f32 / (1u64 << 24) as f32
-            };
-            let n = nodes_ref.normal[e];
-            let (mut sum, mut sum_sq, mut valid) = (0.0f64, 0.0f64, 0u32);
-            let partly_hidden = nodes_ref.open_area[e] < nodes_ref.area[e];
-            for _ in 0..rays {
-                let p = triangle_point(&nodes_ref.corners[e], uniform(), uniform());
-                let d = cosine_direction(n, uniform(), uniform());
-                let origin = leave_surface(p, n, offset);
-                match tracer.cosine_ray(nodes_ref, occluders, origin, d) {
-                    RayEnd::Facing(l) => {
-                        let read = (nodes_ref.exitance[l] - nodes_ref.source_exitance(l)).max(DVec3::ZERO);
-                        let r = w.dot(read) / w_sum;
-                        sum += r;
-                        sum_sq += r * r;
-                    }
-                    // From the hidden part of a leaf partly inside an object resting on it: not a
-                    // sample of the open part its links gather for.
-                    RayEnd::Behind if partly_hidden => continue,
-                    RayEnd::Behind | RayEnd::Escaped => {}
-                }
-                valid += 1;
-            }
-            (sum, sum_sq, valid)
-        })
-        .collect();
+    let estimator = estimator.for_leaves(leaves.len());
+    let mut reads = leaf_reads(nodes, inputs, occluders, links, &leaves, root, estimator, seed, offset);
+    let links_read = links_indirect(nodes, &leaves, &gathered, &direct);
+    let areas: Vec<f64> = leaves.iter().map(|&e| nodes.open_area[e] as f64).collect();
+    if let IndirectEstimator::Hemicube { stride, .. } = estimator {
+        sampling_variance(&mut reads, &links_read, &areas, stride);
+    }
+    let rays = match estimator {
+        IndirectEstimator::Rays { rays } => leaves.len() as u64 * rays as u64,
+        IndirectEstimator::Hemicube { .. } => reads.iter().flatten().count() as u64,
+    };
 
     // Leaves below each node; children have higher indices than their parent.
     let mut count = vec![0usize; nodes.len()];
@@ -273,20 +424,9 @@ pub fn measure(
     let mut sums: Vec<rustc_hash::FxHashMap<usize, (f64, f64, f64)>> = vec![Default::default(); limits.len()];
     let mut up: Vec<rustc_hash::FxHashMap<usize, usize>> = vec![Default::default(); limits.len()];
     for (i, &e) in leaves.iter().enumerate() {
-        let w = nodes.reflectance[e].as_dvec3();
-        let w_sum = w.x + w.y + w.z;
-        let a = nodes.open_area[e] as f64;
-        if !(a > 0.0) || !(w_sum > 0.0) {
-            continue;
-        }
-        let (sum, sum_sq, valid) = reads[i];
-        if valid == 0 {
-            continue;
-        }
-        let n_rays = valid as f64;
-        let mean = sum / n_rays;
-        let variance = (sum_sq / n_rays - mean * mean).max(0.0) / (n_rays - 1.0).max(1.0);
-        let links_indirect = w.dot((gathered[e] - direct[e]).max(DVec3::ZERO)) / w_sum;
+        let a = areas[i];
+        let Some(read) = reads[i] else { continue };
+        let (mean, variance, links_indirect) = (read.indirect, read.variance, links_read[i]);
         let groups: Vec<usize> = limits.iter().map(|&limit| group_at(e, limit)).collect();
         for (level, &g) in groups.iter().enumerate() {
             let entry = sums[level].entry(g).or_insert((0.0, 0.0, 0.0));
@@ -317,7 +457,7 @@ pub fn measure(
     let mut stats = CorrectionStats {
         groups: gain_of_group.len(),
         corrected: gain_of_group.values().filter(|&&g| g != 1.0).count(),
-        rays: leaves.len() as u64 * rays as u64,
+        rays,
         ..Default::default()
     };
     // A gain never lets a leaf reflect all it gathers (ρ·γ·R < 1, R its row sum): the sweeps would

@@ -191,6 +191,12 @@ pub fn exitance_limit(nodes: &Nodes, root: usize) -> f64 {
 /// that the first refinement pass measures link errors with (B = S = E + ρ·E_c before any bounce over
 /// links).
 pub fn reset_to_emission(nodes: &mut Nodes, root: usize) {
+    set_leaves(nodes, root, |nodes, n| nodes.source_exitance(n));
+}
+
+/// Sets every leaf below `root` to `leaf(nodes, n)` and pulls the open-area-weighted means up
+/// (`gather::pulled`).
+pub fn set_leaves(nodes: &mut Nodes, root: usize, leaf: impl Fn(&Nodes, usize) -> DVec3) {
     let mut order = Vec::new();
     let mut stack = vec![root];
     while let Some(n) = stack.pop() {
@@ -198,7 +204,7 @@ pub fn reset_to_emission(nodes: &mut Nodes, root: usize) {
         stack.extend(nodes.children(n));
     }
     for &n in order.iter().rev() {
-        let b = if nodes.is_leaf(n) { nodes.source_exitance(n) } else { pulled(nodes, n, &nodes.exitance) };
+        let b = if nodes.is_leaf(n) { leaf(nodes, n) } else { pulled(nodes, n, &nodes.exitance) };
         nodes.exitance[n] = b;
         nodes.exitance_mean[n] = mean_channel(b);
     }
