@@ -30,7 +30,9 @@ use crate::radiosity::resume::{self, Checkpointer, Resume, ShardError};
 use crate::radiosity::solution_file::{self, SolutionFileError, SolutionMesh};
 use crate::radiosity::{fingerprint, PassOneStats, Solution};
 use crate::scene::overrides::OverrideError;
-use crate::scene::{self, FinalGatherMode, MethodChoice, Overrides, SceneDescription, SceneError, SolutionReader};
+use crate::scene::{
+    self, FinalGatherMode, MethodChoice, Overrides, RenderParams, SceneDescription, SceneError, SolutionReader,
+};
 use crate::trace::camera::PinholeCamera;
 use crate::trace::gather;
 use crate::trace::whitted::{RayCounts, TraceMode, Tracer};
@@ -715,7 +717,11 @@ pub fn tracer_for<'a>(
         stage.inc(1);
         stage.set_message(format!("{records} records"));
     };
-    let (gather, prepass) = gather::for_image(&tracer, &camera, &scene.render, image, pixel_angle_rad, &on_level_done);
+    let render = RenderParams {
+        gather_rays: scene.render.gather_rays_for(solution.leaf_geometry.is_some()),
+        ..scene.render.clone()
+    };
+    let (gather, prepass) = gather::for_image(&tracer, &camera, &render, image, pixel_angle_rad, &on_level_done);
     stats.secondary_rays += prepass.rays.total();
     stage.finish(&format!(
         "{} records ({} refined) from {} gathers",

@@ -779,3 +779,26 @@ fn a_caustic_counts_once_with_the_final_gather() {
         assert!((got / expected - 1.0).abs() <= 0.02, "{gather:?} {method:?}: {got} against {expected}");
     }
 }
+
+/// A hierarchical solution's gathers bounce at every hit, so unless the scene sets `gather_rays` (or
+/// `near_bounce`, which turns the every-hit bounce off) they take three quarters of the preset's
+/// rays (`scene::HIERARCHY_GATHER_SHARE`); the uniform and adaptive meshes keep the preset's, and a
+/// scene's own `gather_rays` is kept on every solution.
+#[test]
+fn a_hierarchical_solution_gathers_with_fewer_rays_unless_the_scene_says_how_many() {
+    let scene_with = |render: &str| {
+        let text = format!(
+            "quality = \"default\"\n[[quad]]\ncorners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]\n\
+             material = \"m\"\n[[material]]\nname = \"m\"\nkd = [0.5, 0.5, 0.5]\n[render]\n{render}"
+        );
+        radray::scene::parse_str(&text, std::path::Path::new("gather.toml")).unwrap().render
+    };
+    let preset = scene_with("");
+    assert_eq!(preset.gather_rays, 1024);
+    assert_eq!(preset.gather_rays_for(false), 1024);
+    assert_eq!(preset.gather_rays_for(true), 768);
+    let set = scene_with("gather_rays = 1024");
+    assert_eq!(set.gather_rays_for(true), 1024);
+    let near = scene_with("near_bounce = 2.5");
+    assert_eq!(near.gather_rays_for(true), 1024);
+}

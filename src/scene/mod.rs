@@ -398,8 +398,11 @@ pub struct RenderParams {
     pub direct: DirectMode,
     /// Final gather of the indirect light in the final image.
     pub final_gather: FinalGatherMode,
-    /// Rays per gather (stratified over the cosine-weighted hemisphere).
+    /// Rays per gather (stratified over the cosine-weighted hemisphere); on a hierarchical solution
+    /// `RenderParams::gather_rays_for` takes fewer unless `gather_rays_set`.
     pub gather_rays: u32,
+    /// The scene sets `gather_rays` itself: every solution gathers with it.
+    pub gather_rays_set: bool,
     /// The irradiance cache's accuracy a (Ward's largest error weight); 0 gathers at every diffuse hit
     /// with no cache.
     pub cache_accuracy: f32,
@@ -448,6 +451,16 @@ pub const HIERARCHY_NEAR_BOUNCE: f32 = f32::INFINITY;
 /// within 2.5 sizes 0.0109 in 295, none 0.0111 in 271 (docs/accuracy.md, session 31).
 pub const HIERARCHY_SHADOW_FACTOR: f32 = DEFAULT_NEAR_BOUNCE;
 
+/// The share of the preset's `gather_rays` a hierarchical solution gathers with when the scene sets
+/// neither `gather_rays` nor `near_bounce` (`RenderParams::gather_rays_for`): there every hit of a
+/// gather ray is re-estimated by a secondary ray (`HIERARCHY_NEAR_BOUNCE`), and fewer primary rays
+/// lose little. Session 44 (docs/accuracy.md), final images against the references, one thread:
+/// untextured Crytek Sponza at 320×180 from one solution, 1,024 rays 0.01011 in 535 CPU-s of pass
+/// two, 768 0.01013 in 385, 512 0.01018 in 295; vault_hall (256², seed 0) 1,024 2.346e-4 (seed 1:
+/// 2.277e-4), 768 2.183e-4, 512 2.472e-4. Three quarters: issue 10's textured Sponza at 640×360, whole
+/// process, took 1,040 s wall against its 900 with 1,024 (pass two 856 s of it).
+pub const HIERARCHY_GATHER_SHARE: (u32, u32) = (3, 4);
+
 /// `near_bounce_rays` by default on the uniform and adaptive meshes.
 pub const DEFAULT_NEAR_BOUNCE_RAYS: u32 = 2;
 
@@ -491,6 +504,18 @@ pub struct GatherBounce {
 }
 
 impl RenderParams {
+    /// Rays per gather for a solution that is hierarchical or not: `gather_rays`, or on a
+    /// hierarchical solution whose gathers bounce at every hit (the scene sets neither `gather_rays`
+    /// nor `near_bounce`) `HIERARCHY_GATHER_SHARE` of it, at least 16.
+    pub fn gather_rays_for(&self, hierarchical_solution: bool) -> u32 {
+        if hierarchical_solution && !self.gather_rays_set && self.near_bounce.is_none() {
+            let (part, whole) = HIERARCHY_GATHER_SHARE;
+            (self.gather_rays * part / whole).max(16)
+        } else {
+            self.gather_rays
+        }
+    }
+
     /// The gather's second bounce for a solution that is hierarchical or not: the scene's
     /// `near_bounce` and `near_bounce_rays` where it sets them (every re-estimated hit then takes a
     /// shadow ray, as before session 31); else on a hierarchical solution every hit
@@ -523,6 +548,7 @@ impl Default for RenderParams {
             direct: DirectMode::Pixel,
             final_gather: FinalGatherMode::On,
             gather_rays: 1024,
+            gather_rays_set: false,
             cache_accuracy: DEFAULT_CACHE_ACCURACY,
             near_bounce: None,
             near_bounce_rays: None,
@@ -763,6 +789,7 @@ impl SceneDescription {
         let (final_gather, gather_rays, cache_accuracy) = quality.gather_settings();
         self.render.final_gather = final_gather;
         self.render.gather_rays = gather_rays;
+        self.render.gather_rays_set = false;
         self.render.cache_accuracy = cache_accuracy;
     }
 }

@@ -622,6 +622,7 @@ fn render_params(loc: &Locator, raw: Option<&RawRender>, base: RenderParams) -> 
         p.final_gather = g;
     }
     p.gather_rays = loc.positive_int(&r.gather_rays, "gather_rays", 16, 16384, p.gather_rays)?;
+    p.gather_rays_set |= r.gather_rays.is_some();
     if let Some(a) = loc.ranged(&r.cache_accuracy, "cache_accuracy", |x| (0.0..=1.0).contains(&x), "in [0, 1]")? {
         p.cache_accuracy = a;
     }
