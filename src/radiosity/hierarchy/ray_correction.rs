@@ -110,6 +110,7 @@ pub struct CorrectionStats {
     pub corrected: usize,
     /// Σ A·γ / Σ A over the receiving leaves.
     pub mean_gain: f64,
+    /// Rays traced (`IndirectEstimator::Rays`) or hemicubes drawn (`IndirectEstimator::Hemicube`).
     pub rays: u64,
     /// Leaves whose gain the row bound lowered.
     pub capped: usize,
@@ -181,10 +182,6 @@ pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()
 }
 
-/// Measures the correction at the nodes' current exitance (see the module): `rays` cosine rays per
-/// receiving leaf, seeded by `seed` and the leaf, their origins `offset` off the leaf. Leaves the
-/// nodes' exitance as it found it.
-#[allow(clippy::too_many_arguments)]
 /// How `measure` estimates a leaf's indirect irradiance Î.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum IndirectEstimator {
@@ -357,6 +354,9 @@ fn sampling_variance(reads: &mut [Option<LeafRead>], links: &[f64], areas: &[f64
     }
 }
 
+/// Measures the correction at the nodes' current exitance (see the module): Î by `estimator` (its
+/// rays or hemicubes seeded by `seed` and the leaf, their origins `offset` off the leaf). Leaves the
+/// nodes' exitance as it found it.
 #[allow(clippy::too_many_arguments)]
 pub fn measure(
     nodes: &mut Nodes,
