@@ -50,6 +50,12 @@ fn main() -> ExitCode {
         HierarchyProgress::TracingPhotons { pass, sources } => {
             eprintln!("[{:7.1}s] pass {pass}: tracing photons ({sources:?})", start.elapsed().as_secs_f64())
         }
+        HierarchyProgress::MeasuringLinks { pass, receivers } => {
+            eprintln!(
+                "[{:7.1}s] pass {pass}: links of {receivers} receivers by hemicubes",
+                start.elapsed().as_secs_f64()
+            )
+        }
         HierarchyProgress::Correcting { pass, round } => {
             eprintln!("[{:7.1}s] pass {pass}: ray correction, round {round}", start.elapsed().as_secs_f64())
         }

@@ -57,7 +57,8 @@ fn scene_keys_choose_and_tune_the_hierarchy() {
     let path = cornell_with(
         dir.path(),
         "method = \"hierarchical\"\nmemory = \"2GB\"\nerror_threshold = 0.2\nmin_element_size = 5.0\nvisibility_rays = 6\n\
-         dark_receiver_floor = 0.5\ncorrection_rays = 0\ncorrection = \"hemicube\"",
+         dark_receiver_floor = 0.5\ncorrection_rays = 0\ncorrection = \"hemicube\"\n\
+         link_form_factors = \"hemicube\"",
     );
     let s = scene::load(&path).unwrap();
     assert_eq!(s.radiosity.method, MethodChoice::Hierarchical);
@@ -68,6 +69,9 @@ fn scene_keys_choose_and_tune_the_hierarchy() {
     assert_eq!(p.dark_receiver_floor, 0.5);
     assert_eq!(p.correction_rays, 0);
     assert_eq!(p.correction, radray::scene::CorrectionEstimator::Hemicube);
+    assert_eq!(p.link_form_factors, radray::scene::LinkFormFactors::Hemicube);
+    // Unset, every link is measured by its type's estimator.
+    assert_eq!(hierarchy_params(&load("cornell_box.toml")).link_form_factors, radray::scene::LinkFormFactors::Formulas);
     // Unset, the presets measure the indirect light with 16 rays per leaf.
     assert_eq!(hierarchy_params(&load("cornell_box.toml")).correction_rays, 16);
     assert_eq!(hierarchy_params(&load("cornell_box.toml")).correction, radray::scene::CorrectionEstimator::Rays);
@@ -126,6 +130,7 @@ fn bad_hierarchy_keys_are_refused_with_file_and_line() {
         ("correction_rays = -1", "correction_rays"),
         ("correction_rays = 5000", "correction_rays"),
         ("correction = \"photons\"", "correction"),
+        ("link_form_factors = \"rays\"", "link_form_factors"),
         ("method = \"fastest\"", "method"),
     ] {
         let path = cornell_with(dir.path(), extra);

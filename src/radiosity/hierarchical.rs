@@ -75,6 +75,7 @@ pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
         dark_receiver_floor: h.dark_receiver_floor.unwrap_or(defaults.dark_receiver_floor),
         correction_rays: h.correction_rays.unwrap_or(defaults.correction_rays),
         correction: h.correction.unwrap_or(defaults.correction),
+        link_form_factors: h.link_form_factors.unwrap_or(defaults.link_form_factors),
         tolerance: scene.radiosity.tolerance,
         memory_bytes: usize::try_from(h.memory_bytes / 4 * 3).unwrap_or(usize::MAX),
         seed: scene.radiosity.seed,
@@ -123,6 +124,9 @@ pub fn geometry_key(scene: &SceneDescription, params: &HierarchyParams) -> u64 {
     // Only when set, so that the keys of kept links and solution files from before it stay valid.
     if params.dark_receiver_floor != 1.0 {
         h.write_u64(params.dark_receiver_floor.to_bits());
+    }
+    if params.link_form_factors != crate::scene::LinkFormFactors::Formulas {
+        h.write(b"link-hemicubes");
     }
     h.finish()
 }
@@ -371,6 +375,11 @@ impl PassOneMethod for Hierarchical {
                 HierarchyProgress::TracingPhotons { pass, sources } => {
                     stage.set_message(format!("pass {pass}: {}", photons_message(sources)));
                 }
+                HierarchyProgress::MeasuringLinks { pass, receivers } => {
+                    stage.set_message(format!(
+                        "pass {pass}: measuring the far links of {receivers} receivers with hemicubes"
+                    ));
+                }
                 HierarchyProgress::Correcting { pass, round } => {
                     let rounds = hierarchy::CORRECTION_ROUNDS;
                     let by = match correction {
@@ -572,7 +581,9 @@ impl Hierarchical {
                     shard.count,
                     photons_message(sources)
                 )),
-                HierarchyProgress::Sweeping { .. } | HierarchyProgress::Correcting { .. } => {}
+                HierarchyProgress::Sweeping { .. }
+                | HierarchyProgress::Correcting { .. }
+                | HierarchyProgress::MeasuringLinks { .. } => {}
             });
         let (solved, _) = match solved {
             Err(HierarchyError::Stopped) => {

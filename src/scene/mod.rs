@@ -293,6 +293,20 @@ pub struct HierarchySettings {
     pub correction_rays: Option<u32>,
     /// How the correction measures the leaves' indirect light; `None`: rays.
     pub correction: Option<CorrectionEstimator>,
+    /// What measures the form factors of element receivers' far links; `None`: the formulas.
+    pub link_form_factors: Option<LinkFormFactors>,
+}
+
+/// What measures the form factors of the hierarchy's links (`[radiosity] link_form_factors`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LinkFormFactors {
+    /// Every link by its type's estimator (`radiosity::hierarchy::links::estimate`; the default).
+    #[default]
+    Formulas,
+    /// The far links of element receivers by a hemicube at the receiver that draws the tree as a
+    /// cut (`radiosity::hierarchy::hemicube_links`); the other links by their estimators.
+    Hemicube,
 }
 
 /// How the hierarchy's correction measures the indirect light its links bring (`[radiosity]
@@ -323,6 +337,7 @@ impl Default for HierarchySettings {
             dark_receiver_floor: None,
             correction_rays: None,
             correction: None,
+            link_form_factors: None,
         }
     }
 }

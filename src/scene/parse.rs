@@ -99,6 +99,7 @@ struct RawRadiosity {
     dark_receiver_floor: Option<S<f64>>,
     correction_rays: Option<S<i64>>,
     correction: Option<CorrectionEstimator>,
+    link_form_factors: Option<LinkFormFactors>,
     adaptive_levels: Option<S<i64>>,
     adaptive_threshold: Option<S<f64>>,
     auto_adaptive: Option<bool>,
@@ -600,6 +601,9 @@ fn hierarchy_settings(loc: &Locator, r: &RawRadiosity, p: &mut RadiosityParams) 
     }
     if let Some(c) = r.correction {
         h.correction = Some(c);
+    }
+    if let Some(l) = r.link_form_factors {
+        h.link_form_factors = Some(l);
     }
     let a = &mut p.adaptive;
     a.levels = loc.positive_int(&r.adaptive_levels, "adaptive_levels", 0, 6, a.levels)?;

@@ -87,26 +87,7 @@ pub fn irradiance_at(
             continue;
         }
         drawn += 1;
-        if nodes.is_cluster[n] {
-            let omega = -to / d;
-            let area =
-                scene.lobes.projected_towards(n, omega).unwrap_or(0.0).min(std::f64::consts::PI * (r * r) as f64);
-            if area > 0.0 {
-                let half = 0.5 * area.sqrt() as f32;
-                let t = omega.any_orthonormal_vector();
-                let b = omega.cross(t);
-                let square = [c - half * (t + b), c + half * (t - b), c + half * (t + b), c - half * (t - b)];
-                buffers.add_polygon(hc, n as u32, &square, omega, c);
-            }
-            continue;
-        }
-        let corners = nodes.corners[n];
-        let facing = (c - eye).dot(nodes.normal[n]) < 0.0;
-        if facing {
-            buffers.add_polygon(hc, n as u32, &corners, nodes.normal[n], c);
-        } else if !scene.two_sided[nodes.input[n] as usize] {
-            buffers.add_polygon(hc, back_item, &[corners[0], corners[2], corners[1]], -nodes.normal[n], c);
-        }
+        draw_whole(scene, hc, buffers, n, eye, n as u32, back_item);
     }
     let (mut irradiance, mut coverage) = (DVec3::ZERO, 0.0f64);
     buffers.finish(hc, |j, f| {
@@ -124,4 +105,45 @@ pub fn irradiance_at(
         irradiance += b * f;
     });
     CutIrradiance { irradiance, coverage, drawn }
+}
+
+/// Draws node `n` whole into `buffers` as seen from `eye` (see the module's doc): an element as its
+/// own triangle under `item` (its back, when p sees the back of a one-sided surface, under
+/// `back_item`; nothing when the surface is two-sided, whose back sheet is another node); a cluster
+/// as a square facing p of its lobes' projected area towards p, under `item`.
+pub fn draw_whole(
+    scene: &CutScene,
+    hc: &Hemicube,
+    buffers: &mut ItemBuffer,
+    n: usize,
+    eye: Vec3,
+    item: u32,
+    back_item: u32,
+) {
+    let nodes = scene.nodes;
+    let (c, r) = (nodes.centre[n], nodes.radius[n]);
+    if nodes.is_cluster[n] {
+        let to = c - eye;
+        let d = to.length();
+        if d <= 0.0 {
+            return;
+        }
+        let omega = -to / d;
+        let area = scene.lobes.projected_towards(n, omega).unwrap_or(0.0).min(std::f64::consts::PI * (r * r) as f64);
+        if area > 0.0 {
+            let half = 0.5 * area.sqrt() as f32;
+            let t = omega.any_orthonormal_vector();
+            let b = omega.cross(t);
+            let square = [c - half * (t + b), c + half * (t - b), c + half * (t + b), c - half * (t - b)];
+            buffers.add_polygon(hc, item, &square, omega, c);
+        }
+        return;
+    }
+    let corners = nodes.corners[n];
+    let facing = (c - eye).dot(nodes.normal[n]) < 0.0;
+    if facing {
+        buffers.add_polygon(hc, item, &corners, nodes.normal[n], c);
+    } else if !scene.two_sided[nodes.input[n] as usize] {
+        buffers.add_polygon(hc, back_item, &[corners[0], corners[2], corners[1]], -nodes.normal[n], c);
+    }
 }

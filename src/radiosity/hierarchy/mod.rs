@@ -16,8 +16,10 @@
 //!   self-link): the element estimator summed over all leaf pairs when there are at most 64, else
 //!   a sampled estimator exact in each sampled source element (`visibility::sampled_form_factor`).
 //!
-//! No link is measured by a hemicube; `hemicube_cut` draws the tree as a cut into a hemicube item
-//! buffer to measure the indirect light a leaf gathers, one of the correction's two estimators.
+//! With `link_form_factors = "hemicube"` (not the default) the far links of element receivers are
+//! measured again after the last pass by a hemicube at each receiver that draws the tree as a cut
+//! (`hemicube_links`); `hemicube_cut` draws that cut, and with `correction = "hemicube"` measures
+//! with it the indirect light a leaf gathers, one of the correction's two estimators.
 //!
 //! Light through mirrors and glass, which no link carries, enters as photons landing in the leaves
 //! (`caustics`), traced by the caller (`solve_logged`'s `CausticTracer`).
@@ -33,6 +35,7 @@ pub mod estimates;
 pub mod form_factor;
 pub mod gather;
 pub mod hemicube_cut;
+pub mod hemicube_links;
 pub mod interpolate;
 pub mod links;
 pub mod links_file;
@@ -59,7 +62,7 @@ use glam::{DVec3, Vec3};
 
 use crate::accel::Accel;
 use crate::material::SceneTextures;
-use crate::scene::{CorrectionEstimator, Material, SceneDescription};
+use crate::scene::{CorrectionEstimator, LinkFormFactors, Material, SceneDescription};
 use caustics::{CausticLight, CausticSources, CausticTracer};
 use contact::{split_at_contacts, ContactProbe};
 use estimates::{EstimateHooks, EstimateLog, Stopped};
@@ -136,6 +139,10 @@ pub struct HierarchyParams {
     /// leaf, or hemicubes that draw the tree as a cut (`hemicube_cut`, `CUT_RESOLUTION_PX`,
     /// `CUT_STRIDE`, `CUT_PIXELS`).
     pub correction: CorrectionEstimator,
+    /// What measures the far links of element receivers after the last refinement pass: their
+    /// estimators, or a hemicube at each such receiver (`hemicube_links`, `LINK_RESOLUTION_PX`,
+    /// `LINK_CUT_PIXELS`).
+    pub link_form_factors: LinkFormFactors,
 }
 
 /// The presets' rays per leaf of the ray correction (`HierarchyParams::correction_rays`, the scene
@@ -157,6 +164,16 @@ pub const CUT_RESOLUTION_PX: u32 = 32;
 pub const CUT_STRIDE: u32 = 16;
 pub const CUT_PIXELS: f32 = 2.0;
 pub const CUT_HEMICUBES: u32 = 10_000;
+
+/// The hemicube that measures links (`LinkFormFactors::Hemicube`, `hemicube_links`): pixels across
+/// its top face, and the largest size (pixels) of a cluster drawn whole as a square (elements are
+/// always drawn whole unless a source lies below them: their triangles are exact). Session 45
+/// (docs/accuracy.md): see the README's "Estimators".
+pub const LINK_RESOLUTION_PX: u32 = 128;
+pub const LINK_CUT_PIXELS: f32 = 2.0;
+
+/// Mixed into the solve's seed for the turns of the links' hemicubes.
+const LINK_HEMICUBE_SEED: u64 = 0x11c5_4e3a;
 
 /// The correction's estimator for `params`.
 fn correction_estimator(params: &HierarchyParams) -> ray_correction::IndirectEstimator {
@@ -257,6 +274,7 @@ impl Default for HierarchyParams {
             dark_receiver_floor: DARK_RECEIVER_FLOOR,
             correction_rays: CORRECTION_RAYS,
             correction: CorrectionEstimator::Rays,
+            link_form_factors: LinkFormFactors::Formulas,
         }
     }
 }
@@ -348,6 +366,8 @@ pub struct HierarchyStats {
     pub max_row_sum: f64,
     /// The last round of the ray correction (`ray_correction`; all zero when it is off).
     pub correction: ray_correction::CorrectionStats,
+    /// What the links' hemicubes measured (`hemicube_links`; all zero unless they ran).
+    pub link_hemicubes: hemicube_links::LinkHemicubeStats,
 }
 
 /// Progress of a solve, for a progress bar or log lines.
@@ -370,6 +390,11 @@ pub enum HierarchyProgress {
         sweep: u32,
         max_change: f64,
         max_exitance: f64,
+    },
+    /// The far links of element receivers are about to be measured by hemicubes (`hemicube_links`).
+    MeasuringLinks {
+        pass: u32,
+        receivers: usize,
     },
     /// Round `round` of the ray correction (`ray_correction`) is about to trace its rays.
     Correcting {
@@ -714,6 +739,28 @@ pub fn solve_logged(
                 scales = Some(current);
             }
         }
+    }
+    // The far links of element receivers measured again by hemicubes at the receivers
+    // (`hemicube_links`), and the sweeps again; a shard, which stops unswept, leaves this to its merge.
+    if let Some(current) = scales.as_mut().filter(|_| params.link_form_factors == LinkFormFactors::Hemicube) {
+        let pass = stats.refinement_passes;
+        on_progress(HierarchyProgress::MeasuringLinks {
+            pass,
+            receivers: hemicube_links::receivers(&nodes, &links).len(),
+        });
+        let two_sided = hemicube_cut::two_sided_inputs(&inputs);
+        let lobes = lobes::Lobes::new(&nodes, &links, root);
+        let settings = hemicube_links::LinkHemicubes { resolution_px: LINK_RESOLUTION_PX, cut_pixels: LINK_CUT_PIXELS };
+        let scene = hemicube_cut::CutScene {
+            nodes: &nodes,
+            exitance: &nodes.exitance,
+            lobes: &lobes,
+            two_sided: &two_sided,
+            root,
+        };
+        stats.link_hemicubes =
+            hemicube_links::measure_links(&scene, &mut links, settings, params.seed ^ LINK_HEMICUBE_SEED, ctx.offset);
+        sweep_pass(&mut nodes, &links, current, root, params, pass, &mut stats, hooks.stop, on_progress)?;
     }
     // Light between diffuse surfaces through mirrors and glass (`caustics`): once the solve has
     // converged, photons from every surface's reflected light join the emitters', and the last links
