@@ -2158,6 +2158,6 @@ fn furnace_stays_exact_with_links_measured_by_hemicubes() {
     let worst = solution.leaf_exitance.iter().map(|b| ((b.x as f64 - exact) / exact).abs()).fold(0.0f64, f64::max);
     let m = &solution.stats.link_hemicubes;
     println!("furnace: {m:?}, worst leaf error {worst:.3e}");
-    assert!(m.links > 0 && m.hemicubes == m.receivers && m.receivers > 0, "{m:?}");
+    assert!(m.links > 0 && m.hemicubes >= m.receivers && m.receivers > 0, "{m:?}");
     assert!(worst <= 0.01, "worst relative error {worst}");
 }
