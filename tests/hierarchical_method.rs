@@ -354,6 +354,54 @@ fn stats_record_links_elements_passes_and_peak_memory() {
     assert!(v["peak_memory_bytes"].as_u64().unwrap() > 0);
 }
 
+/// The scene's `solver` reaches the hierarchy: `jacobi` sweeps from the previous sweep's values and
+/// needs more sweeps than Gauss-Seidel for the same tolerance, to the same surfaces (mean image
+/// within 1%, the tolerance 1e-4 of the largest exitance bounds both solves' distance from their
+/// common solution); `progressive`, which has no form over the links, is a warning and Gauss-Seidel.
+/// Jacobi has its own geometry key: its links come from a different solve.
+#[test]
+fn the_scenes_solver_chooses_the_hierarchys_sweeps() {
+    let dir = tempfile::tempdir().unwrap();
+    let run_with = |name: &str, solver: &str| {
+        let scene = cornell_with(&dir.path().join(name), "method = \"hierarchical\"");
+        let text = std::fs::read_to_string(&scene).unwrap();
+        assert!(text.contains("solver = \"gauss-seidel\""));
+        std::fs::write(&scene, text.replace("solver = \"gauss-seidel\"", &format!("solver = \"{solver}\""))).unwrap();
+        let (image, stats) = (dir.path().join(format!("{name}.exr")), dir.path().join(format!("{name}.json")));
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", image.to_str().unwrap(), "--mode", "radiosity"];
+        args.extend_from_slice(SMALL);
+        args.extend_from_slice(&["--stats", stats.to_str().unwrap()]);
+        let out = radray(&args);
+        assert!(out.status.success(), "{solver}: {}", stderr(&out));
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let channels = radray::output::read_exr_channels(&image).unwrap();
+        let values: Vec<f64> = channels
+            .iter()
+            .filter(|(name, _)| ["R", "G", "B"].contains(&name.as_str()))
+            .flat_map(|(_, v)| v.iter().map(|&c| c as f64))
+            .collect();
+        assert_eq!(values.len(), 3 * 24 * 24);
+        (v["sweeps"].as_u64().unwrap(), values.iter().sum::<f64>() / values.len() as f64, stderr(&out))
+    };
+    for name in ["gs", "jacobi", "progressive"] {
+        std::fs::create_dir_all(dir.path().join(name)).unwrap();
+    }
+    let (gs_sweeps, gs_mean, gs_log) = run_with("gs", "gauss-seidel");
+    let (jacobi_sweeps, jacobi_mean, _) = run_with("jacobi", "jacobi");
+    let (progressive_sweeps, progressive_mean, progressive_log) = run_with("progressive", "progressive");
+    assert!(jacobi_sweeps > gs_sweeps, "Jacobi {jacobi_sweeps} sweeps, Gauss-Seidel {gs_sweeps}");
+    assert!((jacobi_mean / gs_mean - 1.0).abs() < 0.01, "mean pixel {jacobi_mean} against {gs_mean}");
+    assert!(!gs_log.contains("progressive"), "{gs_log}");
+    assert!(progressive_log.contains("warning: solver = \"progressive\""), "{progressive_log}");
+    assert_eq!((progressive_sweeps, progressive_mean), (gs_sweeps, gs_mean));
+    let keys = [scene::SolverKind::GaussSeidel, scene::SolverKind::Jacobi].map(|solver| {
+        let mut s = cornell_hierarchical();
+        s.radiosity.solver = solver;
+        geometry_key(&s, &hierarchy_params(&s))
+    });
+    assert_ne!(keys[0], keys[1]);
+}
+
 #[test]
 fn a_batch_reuses_a_hierarchical_solution_for_a_new_view() {
     let dir = tempfile::tempdir().unwrap();

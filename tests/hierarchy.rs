@@ -218,6 +218,7 @@ fn tripled_form_factors_cannot_make_the_sweeps_diverge() {
         &links,
         &mut scales,
         structure.root(),
+        hsolve::SweepOrder::GaussSeidel,
         1.1,
         1e-5,
         200,
@@ -464,6 +465,94 @@ fn cornell_at_emission() -> (SceneDescription, Nodes, usize, radray::accel::Acce
     let accel = radray::accel::Accel::build(&tracing.positions, &tracing.triangles);
     hsolve::reset_to_emission(&mut nodes, root);
     (scene, nodes, root, accel)
+}
+
+/// The Cornell box's links from one refinement at its emission, with their arrival scales.
+fn cornell_links() -> (Nodes, usize, hierarchy::links::Links, gather::ArrivalScales) {
+    let (scene, mut nodes, root, accel) = cornell_at_emission();
+    let ctx =
+        hierarchy::visibility::VisibilityContext { accel: &accel, rays: 4, offset: scene.diagonal() * 1e-5, seed: 1 };
+    let settings = refine::RefineSettings {
+        threshold: 0.05 * 0.22,
+        floor_area: (scene.diagonal() / 100.0).powi(2),
+        min_element_area: (scene.diagonal() / 100.0).powi(2),
+        budget_bytes: 1 << 30,
+        reference_exitance: 0.22,
+        dark_receiver_floor: 1.0,
+    };
+    let links = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {}).links;
+    let scales = gather::ArrivalScales::new(&nodes, &links);
+    (nodes, root, links, scales)
+}
+
+/// A Jacobi sweep over the hierarchy adds exactly one bounce: from any exitance B^k (the emission,
+/// then the sweep's own result), every leaf becomes B^{k+1} = S + ρ·G(B^k), G the irradiance its
+/// links and its ancestors' links bring from B^k (`solve::leaf_irradiance`), whatever the order in
+/// which the sweep reaches the leaves. A Gauss-Seidel sweep (ω = 1) from the same B^k is not that
+/// (more than 1% of the bounce's largest change away): later leaves read values this sweep has
+/// already changed. Same f64 arithmetic on both sides: 1e-12 relative.
+#[test]
+fn a_jacobi_sweep_over_the_hierarchy_adds_exactly_one_bounce() {
+    let (mut nodes, root, links, scales) = cornell_links();
+    let mut lobes = hierarchy::lobes::Lobes::new(&nodes, &links, root);
+    let leaves: Vec<usize> = (0..nodes.len()).filter(|&n| nodes.is_leaf(n)).collect();
+    let next_bounce = |nodes: &Nodes, lobes: &hierarchy::lobes::Lobes| -> Vec<DVec3> {
+        let g = hsolve::leaf_irradiance(nodes, &links, &scales, &nodes.exitance, Some(lobes), root);
+        leaves.iter().map(|&n| nodes.source_exitance(n) + nodes.reflectance[n].as_dvec3() * g[n]).collect()
+    };
+    let largest_difference = |nodes: &Nodes, want: &[DVec3]| {
+        leaves.iter().zip(want).map(|(&n, w)| (nodes.exitance[n] - *w).abs().max_element()).fold(0.0f64, f64::max)
+    };
+    for bounce in 1..=3 {
+        let want = next_bounce(&nodes, &lobes);
+        let scale = want.iter().map(|w| w.max_element()).fold(0.0f64, f64::max);
+        // The most this bounce changes any leaf.
+        let step = largest_difference(&nodes, &want);
+        let mut gauss_seidel = nodes.clone();
+        hsolve::sweep(
+            &mut gauss_seidel,
+            &links,
+            &scales,
+            &mut lobes.clone(),
+            root,
+            hsolve::SweepOrder::GaussSeidel,
+            1.0,
+        );
+        hsolve::sweep(&mut nodes, &links, &scales, &mut lobes, root, hsolve::SweepOrder::Jacobi, 1.7);
+        let jacobi_error = largest_difference(&nodes, &want);
+        assert!(jacobi_error <= 1e-12 * scale, "bounce {bounce}: Jacobi is {jacobi_error} off S + ρG(B)");
+        let gauss_seidel_difference = largest_difference(&gauss_seidel, &want);
+        assert!(
+            gauss_seidel_difference > 0.01 * step,
+            "bounce {bounce}: Gauss-Seidel {gauss_seidel_difference}, the bounce {step}"
+        );
+    }
+}
+
+/// Jacobi and Gauss-Seidel over the same links converge to the same solution (every leaf within
+/// 1e-4 of the largest exitance, at a tolerance of 1e-7), Jacobi in more sweeps.
+#[test]
+fn jacobi_over_the_hierarchy_converges_to_the_gauss_seidel_solution() {
+    let (nodes, root, links, scales) = cornell_links();
+    let solve_in = |order| {
+        let (mut nodes, mut scales) = (nodes.clone(), scales.clone());
+        let (sweeps, converged) =
+            hsolve::solve_until(&mut nodes, &links, &mut scales, root, order, 1.1, 1e-7, 500, &mut |_, _| {}, &|| {
+                false
+            })
+            .unwrap();
+        assert!(converged, "{order:?} did not converge in {sweeps} sweeps");
+        (nodes.exitance, sweeps)
+    };
+    let (gauss_seidel, gs_sweeps) = solve_in(hsolve::SweepOrder::GaussSeidel);
+    let (jacobi, jacobi_sweeps) = solve_in(hsolve::SweepOrder::Jacobi);
+    let largest = gauss_seidel.iter().map(|b| b.max_element()).fold(0.0f64, f64::max);
+    let worst = (0..nodes.len())
+        .filter(|&n| nodes.is_leaf(n))
+        .map(|n| (jacobi[n] - gauss_seidel[n]).abs().max_element())
+        .fold(0.0f64, f64::max);
+    assert!(worst <= 1e-4 * largest, "largest leaf difference {worst} of {largest}");
+    assert!(jacobi_sweeps > gs_sweeps, "Jacobi {jacobi_sweeps} sweeps, Gauss-Seidel {gs_sweeps}");
 }
 
 /// Refinement at a fixed exitance never raises the summed error estimate Σ ρ_R A_R B_S ΔF: a child
@@ -1927,8 +2016,19 @@ fn measured_gain_restores_indirect_light_the_links_lose(estimator: IndirectEstim
         sum / area
     };
     let solve = |nodes: &mut Nodes, links: &hierarchy::links::Links, scales: &mut gather::ArrivalScales| {
-        let (_, converged) =
-            hsolve::solve_until(nodes, links, scales, root, 1.1, 1e-6, 400, &mut |_, _| {}, &|| false).unwrap();
+        let (_, converged) = hsolve::solve_until(
+            nodes,
+            links,
+            scales,
+            root,
+            hsolve::SweepOrder::GaussSeidel,
+            1.1,
+            1e-6,
+            400,
+            &mut |_, _| {},
+            &|| false,
+        )
+        .unwrap();
         assert!(converged);
     };
 

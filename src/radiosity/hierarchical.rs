@@ -26,8 +26,8 @@ use super::hierarchy::nodes::Nodes;
 use super::hierarchy::part_file::{self, HierarchyPart};
 use super::hierarchy::shards::SharedEstimates;
 use super::hierarchy::{
-    self, interpolate::LeafMesh, links::LINK_BYTES, nodes::NODE_BYTES, HierarchyError, HierarchyParams,
-    HierarchyProgress,
+    self, interpolate::LeafMesh, links::LINK_BYTES, nodes::NODE_BYTES, solve::SweepOrder, HierarchyError,
+    HierarchyParams, HierarchyProgress,
 };
 use super::leaf_mesh::{self, LeafGeometry, LeafMeshBuild};
 use super::method::{MethodError, PassOne, PassOneMethod, Reuse};
@@ -76,10 +76,21 @@ pub fn hierarchy_params(scene: &SceneDescription) -> HierarchyParams {
         correction_rays: h.correction_rays.unwrap_or(defaults.correction_rays),
         correction: h.correction.unwrap_or(defaults.correction),
         link_form_factors: h.link_form_factors.unwrap_or(defaults.link_form_factors),
+        sweep_order: sweep_order(scene.radiosity.solver),
         tolerance: scene.radiosity.tolerance,
         memory_bytes: usize::try_from(h.memory_bytes / 4 * 3).unwrap_or(usize::MAX),
         seed: scene.radiosity.seed,
         ..defaults
+    }
+}
+
+/// The hierarchy's sweeps for the scene's `solver`: Jacobi for `jacobi`, Gauss-Seidel otherwise.
+/// Progressive shooting has no form over the links here (they are stored at their receivers, and
+/// shooting needs them by source); `Hierarchical::solve` says so and sweeps with Gauss-Seidel.
+pub fn sweep_order(solver: SolverKind) -> SweepOrder {
+    match solver {
+        SolverKind::Jacobi => SweepOrder::Jacobi,
+        SolverKind::GaussSeidel | SolverKind::Progressive => SweepOrder::GaussSeidel,
     }
 }
 
@@ -127,6 +138,9 @@ pub fn geometry_key(scene: &SceneDescription, params: &HierarchyParams) -> u64 {
     }
     if params.link_form_factors != crate::scene::LinkFormFactors::Formulas {
         h.write(b"link-hemicubes");
+    }
+    if params.sweep_order == SweepOrder::Jacobi {
+        h.write(b"jacobi");
     }
     h.finish()
 }
@@ -313,6 +327,12 @@ impl PassOneMethod for Hierarchical {
     ) -> Result<PassOne, MethodError> {
         self.check_memory(scene, &mesh)?;
         let params = hierarchy_params(scene);
+        if scene.radiosity.solver == SolverKind::Progressive {
+            progress.note(
+                "warning: solver = \"progressive\" has no form over the hierarchy's links (they are stored at their \
+                 receivers; shooting needs them by source): the hierarchy sweeps with Gauss-Seidel",
+            );
+        }
         let stage = progress.stage("hierarchy", params.refinement_passes as u64, "passes");
         let start = Instant::now();
         let mut memory_bytes = 0usize;
@@ -459,7 +479,10 @@ impl PassOneMethod for Hierarchical {
             back: solved.leaf_back.clone(),
         };
         let solve_stats = SolveStats {
-            solver: SolverKind::GaussSeidel,
+            solver: match params.sweep_order {
+                SweepOrder::GaussSeidel => SolverKind::GaussSeidel,
+                SweepOrder::Jacobi => SolverKind::Jacobi,
+            },
             iterations: h.sweeps,
             residual_history: h.error_after_pass_w.clone(),
             converged: h.converged,

@@ -120,6 +120,8 @@ pub struct HierarchyParams {
     pub visibility_rays: u32,
     /// Overrelaxation factor ω of the Gauss-Seidel sweeps (1 = plain Gauss-Seidel).
     pub relaxation: f64,
+    /// Gauss-Seidel (in place, the default) or Jacobi (from the previous sweep, for comparison).
+    pub sweep_order: solve::SweepOrder,
     /// A solve stops when no leaf changes by more than this fraction of the largest leaf exitance.
     pub tolerance: f64,
     pub max_sweeps: u32,
@@ -266,6 +268,7 @@ impl Default for HierarchyParams {
             min_element_divisor: FINEST_MIN_ELEMENT_DIVISOR,
             visibility_rays: 8,
             relaxation: 1.1,
+            sweep_order: solve::SweepOrder::GaussSeidel,
             tolerance: 1e-4,
             max_sweeps: 200,
             refinement_passes: 3,
@@ -850,7 +853,7 @@ fn set_caustic_light(nodes: &mut Nodes, inputs: &clusters::InputTriangles, root:
     }
 }
 
-/// The Gauss-Seidel sweeps of pass `pass` over `links` with their `scales` (warm-started from the
+/// The sweeps (`HierarchyParams::sweep_order`) of pass `pass` over `links` with their `scales` (warm-started from the
 /// nodes' exitance), recorded in `stats`; `Stopped` when `stop` asks between two sweeps.
 #[allow(clippy::too_many_arguments)]
 fn sweep_pass(
@@ -868,9 +871,19 @@ fn sweep_pass(
         on_progress(HierarchyProgress::Sweeping { pass, sweep, max_change: c.max_change, max_exitance: c.max_exitance })
     };
     let (p, sweeps) = (params, params.max_sweeps);
-    let (sweeps, converged) =
-        solve::solve_until(nodes, links, scales, root, p.relaxation, p.tolerance, sweeps, &mut on_sweep, stop)
-            .ok_or(Stopped)?;
+    let (sweeps, converged) = solve::solve_until(
+        nodes,
+        links,
+        scales,
+        root,
+        p.sweep_order,
+        p.relaxation,
+        p.tolerance,
+        sweeps,
+        &mut on_sweep,
+        stop,
+    )
+    .ok_or(Stopped)?;
     stats.sweeps += sweeps;
     stats.converged = converged;
     (stats.bounded_leaves, stats.max_row_sum) = scales.row_bound();

@@ -1,7 +1,8 @@
 //! Gauss-Seidel with overrelaxation over the hierarchy: one sweep walks the tree depth-first; each
 //! node gathers over its links when it is reached (reading exitances in place, so later receivers see
 //! this sweep's values), pushes its irradiance to its children, and pulls their exitance back up as
-//! soon as they are done.
+//! soon as they are done. Jacobi, for comparison, walks the same way but gathers from the exitance
+//! the previous sweep left (`SweepOrder`).
 
 use super::gather::{gather_into, leaf_exitance, pulled, push_step, Arrival, ArrivalScales, Pushed};
 use super::links::Links;
@@ -17,7 +18,19 @@ pub struct SweepChange {
     pub max_exitance: f64,
 }
 
-/// One in-place sweep over the tree below `root` with relaxation factor ω:
+/// Which exitance a sweep's receivers gather.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SweepOrder {
+    /// In place, with overrelaxation: later receivers see this sweep's values.
+    #[default]
+    GaussSeidel,
+    /// From the values the previous sweep left (ω is not used): after k sweeps from B = S every leaf
+    /// holds exactly the light of k bounces over the links, B^{k+1} = S + ρ·g·G(B^k), the truncated
+    /// von Neumann series of the matrix path's Jacobi.
+    Jacobi,
+}
+
+/// One sweep over the tree below `root` in `order`, with relaxation factor ω for Gauss-Seidel:
 ///
 /// G_n = G_parent + Σ_{S linked to n} F_nS B_S (a cluster's links as arrivals that each element below
 /// takes by its own cosine, see `gather::Irradiance`);  leaves: B ← B + ω(S + ρ·g·G − B), g the leaf's
@@ -36,9 +49,13 @@ pub fn sweep(
     scales: &ArrivalScales,
     lobes: &mut Lobes,
     root: usize,
+    order: SweepOrder,
     relaxation: f64,
 ) -> SweepChange {
     let mut change = SweepChange::default();
+    // Jacobi gathers from a copy of the exitance and lobes as the sweep found them.
+    let previous = (order == SweepOrder::Jacobi).then(|| (nodes.exitance.clone(), lobes.clone()));
+    let relaxation = if order == SweepOrder::Jacobi { 1.0 } else { relaxation };
     // The pending arrivals of the current path (`gather::Pushed` holds each node's range of it).
     let mut arrivals: Vec<Arrival> = Vec::new();
     // Irradiance member shares put on elements not yet reached (`ArrivalScales`).
@@ -55,8 +72,12 @@ pub fn sweep(
             continue;
         }
         arrivals.truncate(down.hi);
+        let (sent, sent_lobes) = match &previous {
+            Some((exitance, lobes)) => (exitance.as_slice(), lobes),
+            None => (nodes.exitance.as_slice(), &*lobes),
+        };
         let (own_uniform, own_mean) =
-            gather_into(nodes, links, scales, n, &nodes.exitance, Some(lobes), &mut arrivals, &mut direct);
+            gather_into(nodes, links, scales, n, sent, Some(sent_lobes), &mut arrivals, &mut direct);
         nodes.gathered[n] = own_mean;
         for (m, g) in direct.drain(..) {
             pending[m] += g;
@@ -125,13 +146,14 @@ pub fn solve(
     on_sweep: &mut dyn FnMut(u32, SweepChange),
 ) -> (u32, bool) {
     let mut scales = ArrivalScales::new(nodes, links);
-    solve_until(nodes, links, &mut scales, root, relaxation, tolerance, max_sweeps, on_sweep, &|| false)
+    let order = SweepOrder::GaussSeidel;
+    solve_until(nodes, links, &mut scales, root, order, relaxation, tolerance, max_sweeps, on_sweep, &|| false)
         .expect("never stopped")
 }
 
-/// `solve` over the links' `scales` (`ArrivalScales`, which the caller keeps from one refinement
-/// pass to the next) that looks at `stop` before each sweep: `None` when it asked (the exitance is
-/// then that of the last finished sweep).
+/// `solve` in `order` over the links' `scales` (`ArrivalScales`, which the caller keeps from one
+/// refinement pass to the next) that looks at `stop` before each sweep: `None` when it asked (the
+/// exitance is then that of the last finished sweep).
 ///
 /// A solve whose largest leaf exitance passes `exitance_limit` is diverging (some leaves' links
 /// overshoot their hemisphere so far that ρ·R ≥ 1): its rows are then bounded
@@ -142,6 +164,7 @@ pub fn solve_until(
     links: &Links,
     scales: &mut ArrivalScales,
     root: usize,
+    order: SweepOrder,
     relaxation: f64,
     tolerance: f64,
     max_sweeps: u32,
@@ -154,7 +177,7 @@ pub fn solve_until(
         if stop() {
             return None;
         }
-        let c = sweep(nodes, links, scales, &mut lobes, root, relaxation);
+        let c = sweep(nodes, links, scales, &mut lobes, root, order, relaxation);
         on_sweep(k, c);
         if c.max_exitance > limit && !scales.rows_bounded() {
             scales.bound_rows(nodes, links);
