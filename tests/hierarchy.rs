@@ -467,19 +467,25 @@ fn cornell_at_emission() -> (SceneDescription, Nodes, usize, radray::accel::Acce
     (scene, nodes, root, accel)
 }
 
-/// The Cornell box's links from one refinement at its emission, with their arrival scales.
-fn cornell_links() -> (Nodes, usize, hierarchy::links::Links, gather::ArrivalScales) {
-    let (scene, mut nodes, root, accel) = cornell_at_emission();
-    let ctx =
-        hierarchy::visibility::VisibilityContext { accel: &accel, rays: 4, offset: scene.diagonal() * 1e-5, seed: 1 };
-    let settings = refine::RefineSettings {
-        threshold: 0.05 * 0.22,
+/// Refinement settings on the Cornell box at relative threshold `relative` of its reference
+/// exitance 0.22, elements down to 1/100 of its diagonal, a 1 GiB budget.
+fn cornell_refine_settings(scene: &SceneDescription, relative: f64) -> refine::RefineSettings {
+    refine::RefineSettings {
+        threshold: relative * 0.22,
         floor_area: (scene.diagonal() / 100.0).powi(2),
         min_element_area: (scene.diagonal() / 100.0).powi(2),
         budget_bytes: 1 << 30,
         reference_exitance: 0.22,
         dark_receiver_floor: 1.0,
-    };
+    }
+}
+
+/// The Cornell box's links from one refinement at its emission, with their arrival scales.
+fn cornell_links() -> (Nodes, usize, hierarchy::links::Links, gather::ArrivalScales) {
+    let (scene, mut nodes, root, accel) = cornell_at_emission();
+    let ctx =
+        hierarchy::visibility::VisibilityContext { accel: &accel, rays: 4, offset: scene.diagonal() * 1e-5, seed: 1 };
+    let settings = cornell_refine_settings(&scene, 0.05);
     let links = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {}).links;
     let scales = gather::ArrivalScales::new(&nodes, &links);
     (nodes, root, links, scales)
@@ -534,13 +540,12 @@ fn a_jacobi_sweep_over_the_hierarchy_adds_exactly_one_bounce() {
 #[test]
 fn jacobi_over_the_hierarchy_converges_to_the_gauss_seidel_solution() {
     let (nodes, root, links, scales) = cornell_links();
+    let never = || false;
     let solve_in = |order| {
         let (mut nodes, mut scales) = (nodes.clone(), scales.clone());
         let (sweeps, converged) =
-            hsolve::solve_until(&mut nodes, &links, &mut scales, root, order, 1.1, 1e-7, 500, &mut |_, _| {}, &|| {
-                false
-            })
-            .unwrap();
+            hsolve::solve_until(&mut nodes, &links, &mut scales, root, order, 1.1, 1e-7, 500, &mut |_, _| {}, &never)
+                .unwrap();
         assert!(converged, "{order:?} did not converge in {sweeps} sweeps");
         (nodes.exitance, sweeps)
     };
@@ -564,14 +569,7 @@ fn refinement_never_makes_the_error_estimate_grow() {
     let (scene, mut nodes, root, accel) = cornell_at_emission();
     let ctx =
         hierarchy::visibility::VisibilityContext { accel: &accel, rays: 4, offset: scene.diagonal() * 1e-5, seed: 1 };
-    let mut settings = refine::RefineSettings {
-        threshold: 0.3 * 0.22,
-        floor_area: (scene.diagonal() / 100.0).powi(2),
-        min_element_area: (scene.diagonal() / 100.0).powi(2),
-        budget_bytes: 1 << 30,
-        reference_exitance: 0.22,
-        dark_receiver_floor: 1.0,
-    };
+    let mut settings = cornell_refine_settings(&scene, 0.3);
     let first = refine::refine(&mut nodes, &ctx, Vec::new(), vec![root as u32], &settings, &mut |_, _, _| {});
     hsolve::solve(&mut nodes, &first.links, root, 1.0, 1e-3, 100, &mut |_, _| {});
     let mut links = first.links;

@@ -853,8 +853,9 @@ fn set_caustic_light(nodes: &mut Nodes, inputs: &clusters::InputTriangles, root:
     }
 }
 
-/// The sweeps (`HierarchyParams::sweep_order`) of pass `pass` over `links` with their `scales` (warm-started from the
-/// nodes' exitance), recorded in `stats`; `Stopped` when `stop` asks between two sweeps.
+/// The sweeps (`HierarchyParams::sweep_order`) of pass `pass` over `links` with their `scales`
+/// (warm-started from the nodes' exitance), recorded in `stats`; `Stopped` when `stop` asks between
+/// two sweeps.
 #[allow(clippy::too_many_arguments)]
 fn sweep_pass(
     nodes: &mut Nodes,
