@@ -381,6 +381,8 @@ fn the_scenes_solver_chooses_the_hierarchys_sweeps() {
             .flat_map(|(_, v)| v.iter().map(|&c| c as f64))
             .collect();
         assert_eq!(values.len(), 3 * 24 * 24);
+        let want = if solver == "jacobi" { "jacobi" } else { "gauss-seidel" };
+        assert_eq!(v["hierarchy"]["sweep_order"], want, "{solver}");
         (v["sweeps"].as_u64().unwrap(), values.iter().sum::<f64>() / values.len() as f64, stderr(&out))
     };
     for name in ["gs", "jacobi", "progressive"] {

@@ -341,6 +341,8 @@ pub struct HierarchyStats {
     pub refinement_rounds: u32,
     /// Sweeps over all solves.
     pub sweeps: u32,
+    /// How they gathered: "gauss-seidel" or "jacobi" (`solve::SweepOrder::name`).
+    pub sweep_order: &'static str,
     /// The last solve converged to the tolerance.
     pub converged: bool,
     /// Links estimated over all passes (each with `visibility_rays` rays).
@@ -629,6 +631,7 @@ pub fn solve_logged(
         reference_power_w,
         caustic_photons: caustic_light.as_ref().map_or(0, CausticLight::len),
         caustic_rays: caustic_light.as_ref().map_or(0, |c| c.rays),
+        sweep_order: params.sweep_order.name(),
         ..Default::default()
     };
     set_caustic_light(&mut nodes, &inputs, root, caustic_light.as_ref());

@@ -30,6 +30,16 @@ pub enum SweepOrder {
     Jacobi,
 }
 
+impl SweepOrder {
+    /// The scene's `solver` value for this order.
+    pub fn name(self) -> &'static str {
+        match self {
+            SweepOrder::GaussSeidel => "gauss-seidel",
+            SweepOrder::Jacobi => "jacobi",
+        }
+    }
+}
+
 /// One sweep over the tree below `root` in `order`, with relaxation factor ω for Gauss-Seidel:
 ///
 /// G_n = G_parent + Σ_{S linked to n} F_nS B_S (a cluster's links as arrivals that each element below
